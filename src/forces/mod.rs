@@ -1,0 +1,88 @@
+//! Element force kernels: pure functions from element state to (energy, gradient, Hessian).
+//! Scattering into the global system happens in `solver::assembly`.
+
+pub mod bending;
+pub mod membrane;
+pub mod wind;
+
+/// Which Hessian a kernel returns.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Projection {
+    /// The exact second derivative (may be indefinite); used by tests.
+    Exact,
+    /// A positive semidefinite form, used to assemble the implicit system.
+    Psd,
+}
+
+use crate::math::Real;
+use crate::mesh::Mesh;
+use bending::{dihedral_angle, BendingRest};
+use membrane::MembraneRest;
+
+/// A bending hinge: nodes `[x0, x1, x2, x3]` (edge x0–x1), its edge, material and rest data.
+#[derive(Clone, Copy, Debug)]
+pub struct Hinge {
+    pub nodes: [usize; 4],
+    pub edge: usize,
+    pub material: usize,
+    pub rest: BendingRest,
+}
+
+/// Rest-state data of every element, rebuilt whenever the topology changes.
+#[derive(Clone, Debug, Default)]
+pub struct RestState {
+    pub membrane: Vec<MembraneRest>,
+    pub hinges: Vec<Hinge>,
+}
+
+impl RestState {
+    /// Rest data from material coordinates; rest dihedral angles from `rest_angle(edge)`.
+    /// Fails (with the face index) on a degenerate material-space face.
+    pub fn new(mesh: &Mesh, rest_angle: impl Fn(usize) -> Real) -> Result<Self, usize> {
+        let membrane = (0..mesh.faces.len())
+            .map(|f| MembraneRest::new(mesh.face_uv(f)).ok_or(f))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut hinges = Vec::new();
+        for e in 0..mesh.edges.len() {
+            let Some(nodes) = mesh.hinge_nodes(e) else {
+                continue;
+            };
+            let edge = &mesh.edges[e];
+            let (Some((f0, k0)), Some((f1, _))) = (edge.adj.0[0], edge.adj.0[1]) else {
+                continue;
+            };
+            // Material-space edge length, from the first face's verts.
+            let uv = mesh.face_uv(f0.idx());
+            let k = k0 as usize;
+            let len2 = (uv[(k + 1) % 3] - uv[(k + 2) % 3]).norm_squared();
+            let area = membrane[f0.idx()].area + membrane[f1.idx()].area;
+            hinges.push(Hinge {
+                nodes,
+                edge: e,
+                material: mesh.faces[f0.idx()].material as usize,
+                rest: BendingRest {
+                    shape: 3.0 * len2 / area,
+                    theta0: rest_angle(e),
+                },
+            });
+        }
+        Ok(RestState { membrane, hinges })
+    }
+}
+
+/// Current dihedral angle of every edge (zero on boundary edges): the rest angles of a scene
+/// are those of its input shape.
+pub fn edge_angles(mesh: &Mesh) -> Vec<Real> {
+    (0..mesh.edges.len())
+        .map(|e| match mesh.hinge_nodes(e) {
+            Some(h) => {
+                let x = h.map(|n| {
+                    let p = mesh.nodes[n].x;
+                    crate::math::dual::V3([p.x, p.y, p.z])
+                });
+                dihedral_angle(&x)
+            }
+            None => 0.0,
+        })
+        .collect()
+}

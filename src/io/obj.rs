@@ -1,0 +1,245 @@
+//! Wavefront OBJ: reading meshes (positions, texture coordinates, polygon faces) and writing
+//! frames.
+//!
+//! The reader is our own rather than tobj's: tobj renumbers vertices by first use, and node
+//! indices must stay in file order (handles name them, as ARCSim scenes do), and errors must
+//! name the line. Unknown statements (`vn`, `o`, `g`, `s`, `usemtl`, ARCSim's `vv`…) are skipped.
+
+use std::fmt::Write as _;
+use std::path::Path;
+
+use crate::math::{Vec2, Vec3};
+use crate::mesh::Mesh;
+
+/// One corner of a face: 0-based position index and optional texture-coordinate index.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Corner {
+    pub v: usize,
+    pub vt: Option<usize>,
+}
+
+/// The contents of an OBJ file, in file order. Polygons are fan-triangulated; `face_line` gives
+/// the 1-based source line of each triangle.
+#[derive(Clone, Debug, Default)]
+pub struct ObjData {
+    pub positions: Vec<Vec3>,
+    pub texcoords: Vec<Vec2>,
+    pub triangles: Vec<[Corner; 3]>,
+    pub face_line: Vec<usize>,
+    pub position_line: Vec<usize>,
+}
+
+/// A parse error: line number (1-based, 0 when it concerns the whole file) and message.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ObjError {
+    pub line: usize,
+    pub msg: String,
+}
+
+fn err(line: usize, msg: impl Into<String>) -> ObjError {
+    ObjError {
+        line,
+        msg: msg.into(),
+    }
+}
+
+fn parse_floats<const N: usize>(
+    words: &[&str],
+    line: usize,
+    what: &str,
+) -> Result<[f64; N], ObjError> {
+    if words.len() < N {
+        return Err(err(
+            line,
+            format!("'{what}' needs {N} numbers, found {}", words.len()),
+        ));
+    }
+    let mut out = [0.0; N];
+    for (o, w) in out.iter_mut().zip(words) {
+        let x: f64 = w
+            .parse()
+            .map_err(|_| err(line, format!("'{what}': expected a number, found '{w}'")))?;
+        if !x.is_finite() {
+            return Err(err(
+                line,
+                format!("'{what}': coordinate is not finite ('{w}')"),
+            ));
+        }
+        *o = x;
+    }
+    Ok(out)
+}
+
+/// Resolves a 1-based (or negative, relative) OBJ index against `count` elements seen so far.
+fn resolve_index(word: &str, count: usize, line: usize, what: &str) -> Result<usize, ObjError> {
+    let i: i64 = word
+        .parse()
+        .map_err(|_| err(line, format!("face: bad {what} index '{word}'")))?;
+    let idx = if i > 0 { i - 1 } else { count as i64 + i };
+    if i == 0 || idx < 0 || idx >= count as i64 {
+        return Err(err(
+            line,
+            format!("face: {what} index {i} out of range (1..={count})"),
+        ));
+    }
+    Ok(idx as usize)
+}
+
+pub fn parse_obj(text: &str) -> Result<ObjData, ObjError> {
+    let mut d = ObjData::default();
+    for (ln, raw) in text.lines().enumerate() {
+        let line = ln + 1;
+        let content = raw.split('#').next().unwrap_or("");
+        let mut words = content.split_whitespace();
+        let Some(tag) = words.next() else { continue };
+        let rest: Vec<&str> = words.collect();
+        match tag {
+            "v" => {
+                let [x, y, z] = parse_floats::<3>(&rest, line, "v")?;
+                d.positions.push(Vec3::new(x, y, z));
+                d.position_line.push(line);
+            }
+            "vt" => {
+                let [u, v] = parse_floats::<2>(&rest, line, "vt")?;
+                d.texcoords.push(Vec2::new(u, v));
+            }
+            "f" => {
+                if rest.len() < 3 {
+                    return Err(err(
+                        line,
+                        format!("face needs at least 3 corners, found {}", rest.len()),
+                    ));
+                }
+                let mut corners = Vec::with_capacity(rest.len());
+                for w in &rest {
+                    let mut parts = w.split('/');
+                    let v = resolve_index(
+                        parts.next().unwrap_or(""),
+                        d.positions.len(),
+                        line,
+                        "vertex",
+                    )?;
+                    let vt = match parts.next() {
+                        Some(s) if !s.is_empty() => {
+                            Some(resolve_index(s, d.texcoords.len(), line, "texture")?)
+                        }
+                        _ => None,
+                    };
+                    corners.push(Corner { v, vt });
+                }
+                if corners.iter().any(|c| c.vt.is_some()) != corners.iter().all(|c| c.vt.is_some())
+                {
+                    return Err(err(
+                        line,
+                        "face mixes corners with and without texture coordinates",
+                    ));
+                }
+                for k in 1..corners.len() - 1 {
+                    d.triangles.push([corners[0], corners[k], corners[k + 1]]);
+                    d.face_line.push(line);
+                }
+            }
+            _ => {}
+        }
+    }
+    if d.triangles.is_empty() {
+        return Err(err(0, "no faces (expected at least one 'f' line)"));
+    }
+    let with_vt = d.triangles.iter().filter(|t| t[0].vt.is_some()).count();
+    if with_vt != 0 && with_vt != d.triangles.len() {
+        let i = d
+            .triangles
+            .iter()
+            .position(|t| t[0].vt.is_none())
+            .unwrap_or(0);
+        return Err(err(
+            d.face_line[i],
+            "some faces have texture coordinates and others do not",
+        ));
+    }
+    Ok(d)
+}
+
+/// The OBJ text of one frame: `v` per node (world), `vt` per vert (material coordinates, so
+/// seams keep their separate `vt`), `vn` per node, `f v/vt/vn`; one `o` group per cloth.
+/// Positions print at fixed precision (nanometres), so identical state gives identical bytes.
+pub fn frame_obj(mesh: &Mesh, cloth_names: &[String]) -> String {
+    let mut s = String::with_capacity(mesh.nodes.len() * 80 + mesh.faces.len() * 40);
+    s.push_str("# viewcloth frame\n");
+    for n in &mesh.nodes {
+        let _ = writeln!(s, "v {:.9} {:.9} {:.9}", n.x.x, n.x.y, n.x.z);
+    }
+    for v in &mesh.verts {
+        let _ = writeln!(s, "vt {:.9} {:.9}", v.u.x, v.u.y);
+    }
+    for n in mesh.node_normals() {
+        let _ = writeln!(s, "vn {:.6} {:.6} {:.6}", n.x, n.y, n.z);
+    }
+    let mut current = None;
+    for (f, face) in mesh.faces.iter().enumerate() {
+        let cloth = mesh.nodes[mesh.node_of(face.v[0]).idx()].cloth as usize;
+        if current != Some(cloth) {
+            let name = cloth_names
+                .get(cloth)
+                .map(String::as_str)
+                .unwrap_or("cloth");
+            let _ = writeln!(s, "o {name}");
+            current = Some(cloth);
+        }
+        let n = mesh.face_nodes(f);
+        let _ = writeln!(
+            s,
+            "f {}/{}/{} {}/{}/{} {}/{}/{}",
+            n[0] + 1,
+            face.v[0].0 + 1,
+            n[0] + 1,
+            n[1] + 1,
+            face.v[1].0 + 1,
+            n[1] + 1,
+            n[2] + 1,
+            face.v[2].0 + 1,
+            n[2] + 1
+        );
+    }
+    s
+}
+
+/// Reads and parses an OBJ file; the error string names the file and line.
+pub fn read_obj(path: &Path) -> Result<ObjData, String> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+    parse_obj(&text).map_err(|e| {
+        if e.line == 0 {
+            format!("{}: {}", path.display(), e.msg)
+        } else {
+            format!("{}: line {}: {}", path.display(), e.line, e.msg)
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn parses_polygons_negative_indices_and_skips_unknown() {
+        let d = parse_obj("v 0 0 0\nvt 0 0 0\nvv 0 0 0\nv 1 0 0\nvt 1 0\nv 1 1 0\nvt 1 1\nv 0 1 0\nvt 0 1\nf -4/-4 -3/-3 -2/-2 -1/-1\n").unwrap();
+        assert_eq!(d.positions.len(), 4);
+        assert_eq!(d.triangles.len(), 2);
+        assert_eq!(d.triangles[1][2], Corner { v: 3, vt: Some(3) });
+        assert_eq!(d.face_line, vec![10, 10]);
+    }
+
+    #[test]
+    fn reports_line_numbers() {
+        assert_eq!(parse_obj("v 0 0 0\nv 1 nan 0\n").unwrap_err().line, 2);
+        assert_eq!(
+            parse_obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 4\n")
+                .unwrap_err()
+                .line,
+            4
+        );
+        assert_eq!(parse_obj("v 0 0 0\n").unwrap_err().line, 0);
+        assert!(parse_obj("v 0 0 inf\n").unwrap_err().msg.contains("finite"));
+    }
+}

@@ -1,0 +1,13 @@
+//! viewcloth: a film cloth simulator.
+//!
+//! Scene files → implicit cloth integration (Baraff & Witkin 1998) → one OBJ mesh per frame.
+//! Modules follow the pipeline: `scene` (input), `mesh` (material and world space), `forces`
+//! (element kernels), `solver` (global implicit system), `sim` (the step and the run), `io`.
+
+pub mod forces;
+pub mod io;
+pub mod math;
+pub mod mesh;
+pub mod scene;
+pub mod sim;
+pub mod solver;

@@ -1,0 +1,152 @@
+//! The `viewcloth` command line.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+use viewcloth::scene::{self, InputError, Scene};
+use viewcloth::sim::{run, RunOptions};
+
+#[derive(Parser)]
+#[command(
+    name = "viewcloth",
+    version,
+    about = "Film cloth simulator: scene files in, one OBJ mesh per frame out"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Simulate a scene (the built-in default shot when no SCENE is given).
+    Simulate {
+        /// Scene file (JSON).
+        scene: Option<PathBuf>,
+        /// Number of frames to simulate (overrides the scene).
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+        frames: Option<u64>,
+        /// Output directory (default: out/<scene file stem>/).
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Worker threads (default: all cores). Results are identical for any count.
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
+        threads: Option<u64>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Validate scene files and the meshes they reference, without simulating.
+    Check {
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+    },
+}
+
+/// Exit code for bad input (scene, mesh, command line).
+const EXIT_INPUT: u8 = 2;
+/// Exit code for a simulation or output failure.
+const EXIT_RUN: u8 = 1;
+
+fn load(scene: &Option<PathBuf>) -> Result<(Scene, String), InputError> {
+    match scene {
+        Some(path) => {
+            let stem = path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "scene".into());
+            Ok((scene::load_file(path)?, stem))
+        }
+        None => {
+            let name = scene::DEFAULT_SCENE_NAME;
+            let file = PathBuf::from(format!("<built-in {name}>"));
+            Ok((
+                scene::load_str(scene::DEFAULT_SCENE, &file, Path::new("."), name)?,
+                name.to_string(),
+            ))
+        }
+    }
+}
+
+fn simulate(
+    scene: Option<PathBuf>,
+    frames: Option<u64>,
+    out: Option<PathBuf>,
+    threads: Option<u64>,
+    quiet: bool,
+) -> ExitCode {
+    if let Some(n) = threads {
+        if let Err(e) = rayon::ThreadPoolBuilder::new()
+            .num_threads(n as usize)
+            .build_global()
+        {
+            eprintln!("error: --threads: cannot start {n} threads: {e}");
+            return ExitCode::from(EXIT_INPUT);
+        }
+    }
+    let (scene, stem) = match load(&scene) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_INPUT);
+        }
+    };
+    let out_dir = out.unwrap_or_else(|| Path::new("out").join(&stem));
+    let opts = RunOptions {
+        out_dir: out_dir.clone(),
+        frames: frames.map(|f| f as usize),
+        quiet,
+    };
+    match run(scene, &opts) {
+        Ok(stats) => {
+            if !quiet {
+                println!(
+                    "{}: {} frames in {:.2} s → {}",
+                    stats.scene,
+                    stats.frames.len().saturating_sub(1),
+                    stats.total_wall_s,
+                    out_dir.display()
+                );
+            }
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(EXIT_RUN)
+        }
+    }
+}
+
+fn check(files: &[PathBuf]) -> ExitCode {
+    let mut ok = true;
+    for f in files {
+        match scene::check_file(f) {
+            Ok(()) => println!("{}: ok", f.display()),
+            Err(e) => {
+                eprintln!("error: {e}");
+                ok = false;
+            }
+        }
+    }
+    if ok {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(EXIT_INPUT)
+    }
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Simulate {
+            scene,
+            frames,
+            out,
+            threads,
+            quiet,
+        } => simulate(scene, frames, out, threads, quiet),
+        Command::Check { files } => check(&files),
+    }
+}

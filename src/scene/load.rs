@@ -1,0 +1,626 @@
+//! Reading a scene file: JSON → `SceneSpec` (with the JSON path of any error) → range checks →
+//! meshes loaded and transformed → `Scene`.
+
+use std::path::{Path, PathBuf};
+
+use super::material::resolve;
+use super::motion::{Keyframe, Motion, Transform};
+use super::spec::{ClothSpec, HandleSpec, KeyframeSpec, ObstacleSpec, SceneSpec, TransformSpec};
+use super::{Cloth, Handle, InputError, Obstacle, ObstacleShape, Scene};
+use crate::forces::wind::Wind;
+use crate::io::obj::{read_obj, ObjData};
+use crate::math::{cross2, Vec2, Vec3};
+use crate::mesh::{rectangle, Face, Mesh, MeshError, Node, NodeId, Vert, VertId};
+
+/// The built-in default shot (`viewcloth simulate` with no scene).
+pub const DEFAULT_SCENE: &str = include_str!("../../scenes/hanging_sheet.json");
+pub const DEFAULT_SCENE_NAME: &str = "hanging_sheet";
+
+type Res<T> = Result<T, InputError>;
+
+struct Ctx<'a> {
+    file: &'a Path,
+    base: &'a Path,
+}
+
+impl Ctx<'_> {
+    fn err(&self, path: impl Into<String>, msg: impl Into<String>) -> InputError {
+        InputError {
+            file: self.file.to_path_buf(),
+            location: Some(path.into()),
+            msg: msg.into(),
+        }
+    }
+    fn resolve(&self, rel: &str) -> PathBuf {
+        self.base.join(rel)
+    }
+}
+
+/// Loads and validates a scene file (and every file it references).
+pub fn load_file(path: &Path) -> Res<Scene> {
+    let text = std::fs::read_to_string(path).map_err(|e| InputError {
+        file: path.to_path_buf(),
+        location: None,
+        msg: format!("cannot read scene file: {e}"),
+    })?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    load_str(&text, path, base, &stem)
+}
+
+/// Validates a scene file without keeping the result.
+pub fn check_file(path: &Path) -> Res<()> {
+    load_file(path).map(|_| ())
+}
+
+/// Parses scene JSON. `file` names the source in errors, `base` resolves relative paths and
+/// `default_name` is used when the scene has no `name`.
+pub fn load_str(text: &str, file: &Path, base: &Path, default_name: &str) -> Res<Scene> {
+    let ctx = Ctx { file, base };
+    let de = &mut serde_json::Deserializer::from_str(text);
+    let spec: SceneSpec = serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let loc = if path == "." {
+            "JSON".to_string()
+        } else {
+            path
+        };
+        ctx.err(loc, e.inner().to_string())
+    })?;
+    build(&ctx, spec, default_name)
+}
+
+fn positive(ctx: &Ctx, path: &str, v: f64) -> Res<f64> {
+    if v > 0.0 && v.is_finite() {
+        Ok(v)
+    } else {
+        Err(ctx.err(path, format!("expected a positive number, got {v}")))
+    }
+}
+
+fn finite3(ctx: &Ctx, path: &str, v: [f64; 3]) -> Res<Vec3> {
+    if v.iter().all(|c| c.is_finite()) {
+        Ok(Vec3::from(v))
+    } else {
+        Err(ctx.err(path, "expected finite numbers"))
+    }
+}
+
+fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
+    if spec.version != 1 {
+        return Err(ctx.err("version", format!("expected 1, got {}", spec.version)));
+    }
+    let frame_time = match (spec.frame_time, spec.fps) {
+        (Some(ft), None) => positive(ctx, "frame_time", ft)?,
+        (None, Some(fps)) => 1.0 / positive(ctx, "fps", fps)?,
+        (None, None) => return Err(ctx.err("frame_time", "expected frame_time (s) or fps")),
+        (Some(_), Some(_)) => return Err(ctx.err("fps", "give frame_time or fps, not both")),
+    };
+    let steps_per_frame = match (spec.steps_per_frame, spec.time_step) {
+        (Some(n), None) if n >= 1 && n <= 100_000 => n as usize,
+        (Some(n), None) => {
+            return Err(ctx.err(
+                "steps_per_frame",
+                format!("expected an integer in 1..=100000, got {n}"),
+            ))
+        }
+        (None, Some(h)) => {
+            let h = positive(ctx, "time_step", h)?;
+            let n = frame_time / h;
+            if (n - n.round()).abs() > 1e-6 * n || n.round() < 1.0 || n > 1e5 {
+                return Err(ctx.err(
+                    "time_step",
+                    format!("expected a divisor of the frame time {frame_time} s, got {h}"),
+                ));
+            }
+            n.round() as usize
+        }
+        (None, None) => 1,
+        (Some(_), Some(_)) => {
+            return Err(ctx.err("time_step", "give steps_per_frame or time_step, not both"))
+        }
+    };
+    let frames = match (spec.frames, spec.end_time) {
+        (Some(n), None) if n >= 1 && n <= 10_000_000 => n as usize,
+        (Some(n), None) => {
+            return Err(ctx.err("frames", format!("expected an integer ≥ 1, got {n}")))
+        }
+        (None, Some(t)) => (positive(ctx, "end_time", t)? / frame_time - 1e-9)
+            .ceil()
+            .max(1.0) as usize,
+        (None, None) => return Err(ctx.err("frames", "expected frames or end_time")),
+        (Some(_), Some(_)) => return Err(ctx.err("end_time", "give frames or end_time, not both")),
+    };
+    let gravity = finite3(ctx, "gravity", spec.gravity)?;
+    let wind = match &spec.wind {
+        Some(w) => Some(Wind {
+            velocity: finite3(ctx, "wind.velocity", w.velocity)?,
+            density: non_negative(ctx, "wind.density", w.density)?,
+            drag: non_negative(ctx, "wind.drag", w.drag)?,
+        }),
+        None => None,
+    };
+    if spec.cloths.is_empty() {
+        return Err(ctx.err("cloths", "expected at least one cloth"));
+    }
+    let mut scene = Scene {
+        name: spec
+            .name
+            .clone()
+            .unwrap_or_else(|| default_name.to_string()),
+        frame_time,
+        steps_per_frame,
+        frames,
+        gravity,
+        wind,
+        cloths: Vec::new(),
+        materials: Vec::new(),
+        mesh: Mesh::default(),
+        handles: Vec::new(),
+        obstacles: Vec::new(),
+    };
+    for (c, cs) in spec.cloths.iter().enumerate() {
+        add_cloth(ctx, &mut scene, c, cs)?;
+    }
+    scene
+        .mesh
+        .rebuild_topology()
+        .map_err(|e| ctx.err("cloths", e.to_string()))?;
+    let density: Vec<f64> = scene.materials.iter().map(|m| m.density).collect();
+    scene.mesh.compute_masses(&density);
+    for (o, os) in spec.obstacles.iter().enumerate() {
+        let obstacle = load_obstacle(ctx, o, os)?;
+        scene.obstacles.push(obstacle);
+    }
+    Ok(scene)
+}
+
+fn non_negative(ctx: &Ctx, path: &str, v: f64) -> Res<f64> {
+    if v >= 0.0 && v.is_finite() {
+        Ok(v)
+    } else {
+        Err(ctx.err(path, format!("expected a number ≥ 0, got {v}")))
+    }
+}
+
+fn transform(ctx: &Ctx, path: &str, t: &TransformSpec) -> Res<Transform> {
+    finite3(ctx, &format!("{path}.translate"), t.translate)?;
+    if let Some(r) = t.rotate {
+        if !r.iter().all(|c| c.is_finite())
+            || (r[0] != 0.0 && Vec3::new(r[1], r[2], r[3]).norm() == 0.0)
+        {
+            return Err(ctx.err(
+                format!("{path}.rotate"),
+                "expected [degrees, axis x, y, z] with a non-zero axis",
+            ));
+        }
+    }
+    positive(ctx, &format!("{path}.scale"), t.scale)?;
+    Ok(Transform::new(t.translate, t.rotate, t.scale))
+}
+
+fn motion(ctx: &Ctx, path: &str, keys: &[KeyframeSpec]) -> Res<Motion> {
+    if keys.is_empty() {
+        return Err(ctx.err(path, "expected at least one keyframe"));
+    }
+    let mut out = Vec::with_capacity(keys.len());
+    for (i, k) in keys.iter().enumerate() {
+        let p = format!("{path}[{i}]");
+        if !k.time.is_finite() {
+            return Err(ctx.err(format!("{p}.time"), "expected a finite time"));
+        }
+        if let Some(prev) = out.last().map(|k: &Keyframe| k.time) {
+            if k.time <= prev {
+                return Err(ctx.err(
+                    format!("{p}.time"),
+                    format!("keyframe times must increase: {} after {prev}", k.time),
+                ));
+            }
+        }
+        let t = TransformSpec {
+            translate: k.translate,
+            rotate: k.rotate,
+            scale: k.scale,
+        };
+        out.push(Keyframe {
+            time: k.time,
+            transform: transform(ctx, &p, &t)?,
+        });
+    }
+    Ok(Motion::new(out))
+}
+
+/// A single cloth's mesh in its own node numbering.
+fn cloth_mesh(ctx: &Ctx, path: &str, cs: &ClothSpec) -> Res<Mesh> {
+    match (&cs.mesh, &cs.rectangle) {
+        (Some(file), None) => {
+            let full = ctx.resolve(file);
+            let data = read_obj(&full).map_err(|msg| InputError {
+                file: full.clone(),
+                location: None,
+                msg,
+            })?;
+            mesh_from_obj(&full, &data, cs.uv_scale)
+        }
+        (None, Some(r)) => {
+            let w = positive(ctx, &format!("{path}.rectangle.width"), r.width)?;
+            let h = positive(ctx, &format!("{path}.rectangle.height"), r.height)?;
+            let [nx, ny] = r.resolution;
+            if !(1..=4096).contains(&nx) || !(1..=4096).contains(&ny) {
+                return Err(ctx.err(
+                    format!("{path}.rectangle.resolution"),
+                    format!("expected two integers in 1..=4096, got [{nx}, {ny}]"),
+                ));
+            }
+            rectangle(w, h, nx as usize, ny as usize).map_err(|e| ctx.err(path, e.to_string()))
+        }
+        _ => Err(ctx.err(
+            path,
+            "expected exactly one of \"mesh\" (OBJ file) or \"rectangle\"",
+        )),
+    }
+}
+
+fn add_cloth(ctx: &Ctx, scene: &mut Scene, c: usize, cs: &ClothSpec) -> Res<()> {
+    let path = format!("cloths[{c}]");
+    positive(ctx, &format!("{path}.uv_scale"), cs.uv_scale)?;
+    let material = resolve(&cs.material).map_err(|(field, msg)| {
+        ctx.err(
+            format!("{path}.material.{field}"),
+            format!("expected {msg}"),
+        )
+    })?;
+    let xf = transform(ctx, &format!("{path}.transform"), &cs.transform)?;
+    let velocity = finite3(ctx, &format!("{path}.velocity"), cs.velocity)?;
+    let mut local = cloth_mesh(ctx, &path, cs)?;
+    // ARCSim: a cloth's scale also scales its material coordinates.
+    for v in &mut local.verts {
+        v.u *= xf.scale;
+    }
+    let (node0, vert0) = (scene.mesh.nodes.len(), scene.mesh.verts.len());
+    let name = cs.name.clone().unwrap_or_else(|| format!("cloth{c}"));
+    for n in &local.nodes {
+        scene.mesh.nodes.push(Node {
+            x: xf.apply(&n.x),
+            v: velocity,
+            mass: 0.0,
+            cloth: c as u16,
+        });
+    }
+    for v in &local.verts {
+        scene.mesh.verts.push(Vert {
+            u: v.u,
+            node: NodeId(v.node.0 + node0 as u32),
+        });
+    }
+    for f in &local.faces {
+        scene.mesh.faces.push(Face {
+            v: f.v.map(|v| VertId(v.0 + vert0 as u32)),
+            material: c as u16,
+        });
+    }
+    for (h, hs) in cs.handles.iter().enumerate() {
+        let hp = format!("{path}.handles[{h}]");
+        let nodes = handle_nodes(ctx, &hp, hs, &local)?;
+        let anchors = nodes
+            .iter()
+            .map(|&n| scene.mesh.nodes[n + node0].x)
+            .collect();
+        let motion = hs
+            .motion
+            .as_ref()
+            .map(|m| motion(ctx, &format!("{hp}.motion"), m))
+            .transpose()?;
+        let start = hs.start_time.unwrap_or(f64::NEG_INFINITY);
+        let end = hs.end_time.unwrap_or(f64::INFINITY);
+        if start.is_nan() || end.is_nan() || end <= start {
+            return Err(ctx.err(
+                format!("{hp}.end_time"),
+                format!("expected end_time > start_time, got {start} .. {end}"),
+            ));
+        }
+        scene.handles.push(Handle {
+            nodes: nodes.iter().map(|n| n + node0).collect(),
+            anchors,
+            motion,
+            start,
+            end,
+        });
+    }
+    scene.cloths.push(Cloth {
+        name,
+        material: scene.materials.len(),
+    });
+    scene.materials.push(material);
+    Ok(())
+}
+
+fn handle_nodes(ctx: &Ctx, path: &str, hs: &HandleSpec, mesh: &Mesh) -> Res<Vec<usize>> {
+    let mut nodes = Vec::new();
+    match (&hs.nodes, &hs.region) {
+        (Some(list), None) => {
+            for (i, &n) in list.iter().enumerate() {
+                if n < 0 || n as usize >= mesh.nodes.len() {
+                    return Err(ctx.err(
+                        format!("{path}.nodes[{i}]"),
+                        format!("expected a node index in 0..{}, got {n}", mesh.nodes.len()),
+                    ));
+                }
+                nodes.push(n as usize);
+            }
+        }
+        (None, Some(r)) => {
+            let (lo, hi) = (Vec2::from(r.min), Vec2::from(r.max));
+            for v in &mesh.verts {
+                let u = v.u;
+                if u.x >= lo.x && u.x <= hi.x && u.y >= lo.y && u.y <= hi.y {
+                    nodes.push(v.node.idx());
+                }
+            }
+        }
+        _ => return Err(ctx.err(path, "expected exactly one of \"nodes\" or \"region\"")),
+    }
+    nodes.sort_unstable();
+    nodes.dedup();
+    if nodes.is_empty() {
+        return Err(ctx.err(path, "selects no node"));
+    }
+    Ok(nodes)
+}
+
+fn mesh_from_obj(file: &Path, d: &ObjData, uv_scale: f64) -> Res<Mesh> {
+    let line_err = |line: usize, msg: String| InputError {
+        file: file.to_path_buf(),
+        location: Some(format!("line {line}")),
+        msg,
+    };
+    let mut mesh = Mesh::default();
+    for p in &d.positions {
+        mesh.nodes.push(Node {
+            x: *p,
+            v: Vec3::zeros(),
+            mass: 0.0,
+            cloth: 0,
+        });
+    }
+    let has_vt = d.triangles[0][0].vt.is_some();
+    if has_vt {
+        // One vert per distinct texture coordinate; a position with several is a seam.
+        let mut vert_of_vt: Vec<Option<VertId>> = vec![None; d.texcoords.len()];
+        for (t, tri) in d.triangles.iter().enumerate() {
+            let mut face = [VertId(0); 3];
+            for (k, c) in tri.iter().enumerate() {
+                let vt = c.vt.unwrap_or(0);
+                let id = match vert_of_vt[vt] {
+                    Some(id) if mesh.verts[id.idx()].node.idx() == c.v => id,
+                    Some(_) => {
+                        return Err(line_err(
+                            d.face_line[t],
+                            format!(
+                                "texture coordinate {} is used with two different vertices",
+                                vt + 1
+                            ),
+                        ))
+                    }
+                    None => {
+                        mesh.verts.push(Vert {
+                            u: d.texcoords[vt] * uv_scale,
+                            node: NodeId(c.v as u32),
+                        });
+                        let id = VertId(mesh.verts.len() as u32 - 1);
+                        vert_of_vt[vt] = Some(id);
+                        id
+                    }
+                };
+                face[k] = id;
+            }
+            mesh.faces.push(Face {
+                v: face,
+                material: 0,
+            });
+        }
+    } else {
+        let uv = flatten(d).map_err(|msg| InputError {
+            file: file.to_path_buf(),
+            location: None,
+            msg,
+        })?;
+        for (i, u) in uv.into_iter().enumerate() {
+            mesh.verts.push(Vert {
+                u,
+                node: NodeId(i as u32),
+            });
+        }
+        for tri in &d.triangles {
+            mesh.faces.push(Face {
+                v: tri.map(|c| VertId(c.v as u32)),
+                material: 0,
+            });
+        }
+    }
+    orient_faces(&mut mesh).map_err(|(t, msg)| line_err(d.face_line[t], msg))?;
+    let mut used = vec![false; mesh.nodes.len()];
+    for f in 0..mesh.faces.len() {
+        let n = mesh.face_nodes(f);
+        n.iter().for_each(|&i| used[i] = true);
+        let [a, b, c] = n.map(|i| mesh.nodes[i].x);
+        let scale = (b - a).norm().max((c - a).norm()).max(1e-300);
+        if n[0] == n[1]
+            || n[1] == n[2]
+            || n[0] == n[2]
+            || (b - a).cross(&(c - a)).norm() <= 1e-12 * scale * scale
+        {
+            return Err(line_err(
+                d.face_line[f],
+                "degenerate face (repeated vertex or zero area)".into(),
+            ));
+        }
+    }
+    if let Some(i) = used.iter().position(|u| !u) {
+        return Err(line_err(
+            d.position_line[i],
+            format!("vertex {} is used by no face", i + 1),
+        ));
+    }
+    mesh.rebuild_topology().map_err(|e| match e {
+        MeshError::NonManifoldEdge { a, b } => InputError {
+            file: file.to_path_buf(),
+            location: None,
+            msg: format!("non-manifold: the edge between vertices {} (line {}) and {} (line {}) has more than two faces", a + 1, d.position_line[a as usize], b + 1, d.position_line[b as usize]),
+        },
+        other => InputError { file: file.to_path_buf(), location: None, msg: other.to_string() },
+    })?;
+    mesh.validate().map_err(|e| match e {
+        MeshError::DuplicateFace { face, other } => line_err(
+            d.face_line[face],
+            format!(
+                "duplicate face (same vertices as line {})",
+                d.face_line[other]
+            ),
+        ),
+        MeshError::BadMaterialArea { face, .. } => line_err(
+            d.face_line[face],
+            "face has zero material-space (texture) area".into(),
+        ),
+        other => InputError {
+            file: file.to_path_buf(),
+            location: None,
+            msg: other.to_string(),
+        },
+    })?;
+    Ok(mesh)
+}
+
+/// Material coordinates for a mesh without `vt`: the rest mesh must be flat; its vertices are
+/// expressed in an orthonormal frame of its plane (first axis along the world x axis projected,
+/// or y if x is normal to the plane).
+fn flatten(d: &ObjData) -> Result<Vec<Vec2>, String> {
+    let n = d.positions.len() as f64;
+    let centroid = d.positions.iter().fold(Vec3::zeros(), |a, p| a + p) / n;
+    let mut normal = Vec3::zeros();
+    for t in &d.triangles {
+        let [a, b, c] = t.map(|c| d.positions[c.v]);
+        normal += (b - a).cross(&(c - a));
+    }
+    if normal.norm() == 0.0 {
+        return Err("cannot find the plane of a mesh without texture coordinates".into());
+    }
+    let normal = normal.normalize();
+    let extent = d
+        .positions
+        .iter()
+        .map(|p| (p - centroid).norm())
+        .fold(0.0, f64::max);
+    let off = d
+        .positions
+        .iter()
+        .map(|p| (p - centroid).dot(&normal).abs())
+        .fold(0.0, f64::max);
+    if off > 1e-6 * extent.max(1e-12) {
+        return Err(format!(
+            "the mesh has no texture coordinates (vt) and is not flat (off-plane by {off:.3e} m): give material coordinates as vt"
+        ));
+    }
+    let seed = if normal.x.abs() < 0.9 {
+        Vec3::x()
+    } else {
+        Vec3::y()
+    };
+    let e1 = (seed - normal * normal.dot(&seed)).normalize();
+    let e2 = normal.cross(&e1);
+    Ok(d.positions
+        .iter()
+        .map(|p| Vec2::new((p - centroid).dot(&e1), (p - centroid).dot(&e2)))
+        .collect())
+}
+
+/// Material-space faces must be counter-clockwise: if all are clockwise (mirrored UVs) flip
+/// them; a mix is an error naming the first face that disagrees with the first.
+fn orient_faces(mesh: &mut Mesh) -> Result<(), (usize, String)> {
+    let sign = |m: &Mesh, f: usize| {
+        let [a, b, c] = m.face_uv(f);
+        cross2(&(b - a), &(c - a)).signum()
+    };
+    let first = sign(mesh, 0);
+    for f in 0..mesh.faces.len() {
+        let s = sign(mesh, f);
+        if s == 0.0 {
+            return Err((f, "face has zero material-space (texture) area".into()));
+        }
+        if s != first {
+            return Err((f, "face orientation in material space differs from the first face's (flipped or mirrored texture coordinates)".into()));
+        }
+    }
+    if first < 0.0 {
+        for face in &mut mesh.faces {
+            face.v.swap(1, 2);
+        }
+    }
+    Ok(())
+}
+
+fn load_obstacle(ctx: &Ctx, o: usize, os: &ObstacleSpec) -> Res<Obstacle> {
+    let path = format!("obstacles[{o}]");
+    let count = [
+        os.mesh.is_some(),
+        os.sphere.is_some(),
+        os.plane.is_some(),
+        os.cuboid.is_some(),
+        os.capsule.is_some(),
+    ]
+    .iter()
+    .filter(|b| **b)
+    .count();
+    if count != 1 {
+        return Err(ctx.err(
+            &path,
+            "expected exactly one shape: mesh, sphere, plane, box or capsule",
+        ));
+    }
+    let shape = if let Some(file) = &os.mesh {
+        let full = ctx.resolve(file);
+        let data = read_obj(&full).map_err(|msg| InputError {
+            file: full.clone(),
+            location: None,
+            msg,
+        })?;
+        ObstacleShape::Mesh(data)
+    } else if let Some(s) = &os.sphere {
+        ObstacleShape::Sphere {
+            radius: positive(ctx, &format!("{path}.sphere.radius"), s.radius)?,
+        }
+    } else if let Some(p) = &os.plane {
+        ObstacleShape::Plane {
+            size: [
+                positive(ctx, &format!("{path}.plane.size[0]"), p.size[0])?,
+                positive(ctx, &format!("{path}.plane.size[1]"), p.size[1])?,
+            ],
+        }
+    } else if let Some(b) = &os.cuboid {
+        let mut size = [0.0; 3];
+        for (i, s) in size.iter_mut().enumerate() {
+            *s = positive(ctx, &format!("{path}.box.size[{i}]"), b.size[i])?;
+        }
+        ObstacleShape::Box { size }
+    } else if let Some(c) = &os.capsule {
+        ObstacleShape::Capsule {
+            radius: positive(ctx, &format!("{path}.capsule.radius"), c.radius)?,
+            length: non_negative(ctx, &format!("{path}.capsule.length"), c.length)?,
+        }
+    } else {
+        unreachable!("count == 1 checked above")
+    };
+    Ok(Obstacle {
+        name: os.name.clone().unwrap_or_else(|| format!("obstacle{o}")),
+        shape,
+        transform: transform(ctx, &format!("{path}.transform"), &os.transform)?,
+        motion: os
+            .motion
+            .as_ref()
+            .map(|m| motion(ctx, &format!("{path}.motion"), m))
+            .transpose()?,
+    })
+}

@@ -1,0 +1,112 @@
+//! Scenes: the file format (`spec`), its validation and assembly into a runnable `Scene`
+//! (`load`), fabrics (`material`) and keyframed motion (`motion`).
+
+mod load;
+pub mod material;
+pub mod motion;
+pub mod spec;
+
+pub use load::{check_file, load_file, load_str, DEFAULT_SCENE, DEFAULT_SCENE_NAME};
+
+use std::path::PathBuf;
+
+use crate::forces::wind::Wind;
+use crate::io::obj::ObjData;
+use crate::math::{Real, Vec3};
+use crate::mesh::Mesh;
+use material::Material;
+use motion::{Motion, Transform};
+
+/// A user-input error: the file, where in it (JSON path or line), and what was expected.
+/// Displayed as one line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InputError {
+    pub file: PathBuf,
+    pub location: Option<String>,
+    pub msg: String,
+}
+
+impl std::fmt::Display for InputError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let msg = self.msg.replace('\n', " ");
+        match &self.location {
+            Some(loc) => write!(f, "{}: {}: {}", self.file.display(), loc, msg),
+            None => write!(f, "{}: {}", self.file.display(), msg),
+        }
+    }
+}
+
+impl std::error::Error for InputError {}
+
+/// A cloth of the scene: its name and the range of nodes it owns in the combined mesh.
+#[derive(Clone, Debug)]
+pub struct Cloth {
+    pub name: String,
+    pub material: usize,
+}
+
+/// Pinned nodes, fixed or following a keyframed motion, active during `[start, end)`.
+#[derive(Clone, Debug)]
+pub struct Handle {
+    pub nodes: Vec<usize>,
+    /// Initial world positions of `nodes`; the motion moves these.
+    pub anchors: Vec<Vec3>,
+    pub motion: Option<Motion>,
+    pub start: Real,
+    pub end: Real,
+}
+
+impl Handle {
+    pub fn active(&self, t: Real) -> bool {
+        t >= self.start && t < self.end
+    }
+
+    /// Target position of the `k`-th node at time `t`.
+    pub fn target(&self, k: usize, t: Real) -> Vec3 {
+        match &self.motion {
+            Some(m) => m.eval(t).apply(&self.anchors[k]),
+            None => self.anchors[k],
+        }
+    }
+}
+
+/// An obstacle's shape, as given in the scene.
+#[derive(Clone, Debug)]
+pub enum ObstacleShape {
+    Mesh(ObjData),
+    Sphere { radius: Real },
+    Plane { size: [Real; 2] },
+    Box { size: [Real; 3] },
+    Capsule { radius: Real, length: Real },
+}
+
+#[derive(Clone, Debug)]
+pub struct Obstacle {
+    pub name: String,
+    pub shape: ObstacleShape,
+    pub transform: Transform,
+    pub motion: Option<Motion>,
+}
+
+/// A validated, runnable scene.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub name: String,
+    pub frame_time: Real,
+    pub steps_per_frame: usize,
+    pub frames: usize,
+    pub gravity: Vec3,
+    pub wind: Option<Wind>,
+    pub cloths: Vec<Cloth>,
+    pub materials: Vec<Material>,
+    /// All cloths in one mesh; `Node::cloth` and `Face::material` say which.
+    pub mesh: Mesh,
+    pub handles: Vec<Handle>,
+    pub obstacles: Vec<Obstacle>,
+}
+
+impl Scene {
+    pub fn time_step(&self) -> Real {
+        self.frame_time / self.steps_per_frame as Real
+    }
+}

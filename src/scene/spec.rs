@@ -1,0 +1,241 @@
+//! The scene file format (JSON, version 1), exactly as written by users. Unknown fields are
+//! rejected. Range checks and file references are checked in `scene::load`; every field is
+//! documented in `docs/scene-format.md`.
+
+use serde::Deserialize;
+
+fn one() -> f64 {
+    1.0
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct SceneSpec {
+    pub version: u32,
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Seconds per output frame (or give `fps`).
+    #[serde(default)]
+    pub frame_time: Option<f64>,
+    #[serde(default)]
+    pub fps: Option<f64>,
+    /// Integration steps per frame (or give `time_step`).
+    #[serde(default)]
+    pub steps_per_frame: Option<i64>,
+    #[serde(default)]
+    pub time_step: Option<f64>,
+    /// Number of frames to simulate after frame 0 (or give `end_time`).
+    #[serde(default)]
+    pub frames: Option<i64>,
+    #[serde(default)]
+    pub end_time: Option<f64>,
+    #[serde(default = "default_gravity")]
+    pub gravity: [f64; 3],
+    #[serde(default)]
+    pub wind: Option<WindSpec>,
+    pub cloths: Vec<ClothSpec>,
+    #[serde(default)]
+    pub obstacles: Vec<ObstacleSpec>,
+}
+
+fn default_gravity() -> [f64; 3] {
+    [0.0, 0.0, -9.81]
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct WindSpec {
+    pub velocity: [f64; 3],
+    /// Air density (kg/m³).
+    #[serde(default = "default_air_density")]
+    pub density: f64,
+    /// Tangential drag coefficient (kg/(m²·s)).
+    #[serde(default)]
+    pub drag: f64,
+}
+
+fn default_air_density() -> f64 {
+    1.225
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct ClothSpec {
+    #[serde(default)]
+    pub name: Option<String>,
+    /// OBJ file, relative to the scene file.
+    #[serde(default)]
+    pub mesh: Option<String>,
+    #[serde(default)]
+    pub rectangle: Option<RectangleSpec>,
+    /// Multiplies OBJ `vt` to get material coordinates in metres (before `transform.scale`).
+    #[serde(default = "one")]
+    pub uv_scale: f64,
+    #[serde(default)]
+    pub transform: TransformSpec,
+    /// Initial velocity (m/s).
+    #[serde(default)]
+    pub velocity: [f64; 3],
+    pub material: MaterialSpec,
+    #[serde(default)]
+    pub handles: Vec<HandleSpec>,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RectangleSpec {
+    pub width: f64,
+    pub height: f64,
+    /// Quads along width and height.
+    pub resolution: [i64; 2],
+}
+
+/// Scale, then rotate (`[degrees, axis x, y, z]`), then translate (ARCSim's order).
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct TransformSpec {
+    #[serde(default)]
+    pub translate: [f64; 3],
+    #[serde(default)]
+    pub rotate: Option<[f64; 4]>,
+    #[serde(default = "one")]
+    pub scale: f64,
+}
+
+impl Default for TransformSpec {
+    fn default() -> Self {
+        TransformSpec {
+            translate: [0.0; 3],
+            rotate: None,
+            scale: 1.0,
+        }
+    }
+}
+
+#[derive(Deserialize, Debug, Clone, Default)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialSpec {
+    /// A named fabric (`cotton`, `denim`, `silk`, `jersey`); other fields override it.
+    #[serde(default)]
+    pub preset: Option<String>,
+    /// kg/m².
+    #[serde(default)]
+    pub density: Option<f64>,
+    /// Isotropic membrane: Young's modulus (Pa), Poisson ratio, thickness (m).
+    #[serde(default)]
+    pub youngs_modulus: Option<f64>,
+    #[serde(default)]
+    pub poisson_ratio: Option<f64>,
+    #[serde(default)]
+    pub thickness: Option<f64>,
+    /// Orthotropic membrane (N/m): warp, weft, shear and the warp–weft coupling.
+    #[serde(default)]
+    pub warp: Option<f64>,
+    #[serde(default)]
+    pub weft: Option<f64>,
+    #[serde(default)]
+    pub shear: Option<f64>,
+    #[serde(default)]
+    pub coupling: Option<f64>,
+    /// Bending stiffness (N·m).
+    #[serde(default)]
+    pub bending: Option<f64>,
+    /// Stiffness-proportional (Rayleigh) damping coefficient (s).
+    #[serde(default)]
+    pub damping: Option<f64>,
+    /// Multiplies the membrane stiffness.
+    #[serde(default)]
+    pub stretching_mult: Option<f64>,
+    /// Multiplies the bending stiffness.
+    #[serde(default)]
+    pub bending_mult: Option<f64>,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct HandleSpec {
+    /// Node indices (OBJ vertex order, 0-based; for a rectangle, row-major from the
+    /// lower-left corner).
+    #[serde(default)]
+    pub nodes: Option<Vec<i64>>,
+    /// Every node with a material coordinate inside this box.
+    #[serde(default)]
+    pub region: Option<RegionSpec>,
+    /// Keyframed rigid motion applied to the handle's initial positions.
+    #[serde(default)]
+    pub motion: Option<Vec<KeyframeSpec>>,
+    /// The handle holds from `start_time` until `end_time` (seconds), then releases.
+    #[serde(default)]
+    pub start_time: Option<f64>,
+    #[serde(default)]
+    pub end_time: Option<f64>,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RegionSpec {
+    /// Material-space box corners (metres).
+    pub min: [f64; 2],
+    pub max: [f64; 2],
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct KeyframeSpec {
+    pub time: f64,
+    #[serde(default)]
+    pub translate: [f64; 3],
+    #[serde(default)]
+    pub rotate: Option<[f64; 4]>,
+    #[serde(default = "one")]
+    pub scale: f64,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct ObstacleSpec {
+    #[serde(default)]
+    pub name: Option<String>,
+    /// Exactly one shape: an OBJ mesh, or an analytic sphere, plane, box or capsule.
+    #[serde(default)]
+    pub mesh: Option<String>,
+    #[serde(default)]
+    pub sphere: Option<SphereSpec>,
+    #[serde(default)]
+    pub plane: Option<PlaneSpec>,
+    #[serde(rename = "box", default)]
+    pub cuboid: Option<BoxSpec>,
+    #[serde(default)]
+    pub capsule: Option<CapsuleSpec>,
+    #[serde(default)]
+    pub transform: TransformSpec,
+    #[serde(default)]
+    pub motion: Option<Vec<KeyframeSpec>>,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct SphereSpec {
+    pub radius: f64,
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct PlaneSpec {
+    /// Extent of the (square) plane patch in its local xy plane, normal +z.
+    pub size: [f64; 2],
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct BoxSpec {
+    pub size: [f64; 3],
+}
+
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct CapsuleSpec {
+    pub radius: f64,
+    /// Distance between the two hemisphere centres, along local z.
+    pub length: f64,
+}

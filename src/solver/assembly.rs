@@ -1,0 +1,229 @@
+//! Assembly of the implicit system: element kernels run in parallel in fixed-size chunks, and
+//! their local matrices are scattered serially in element order, so the sums (and the result)
+//! are bit-identical whatever the thread count. This is the one place where local Hessians are
+//! added into the global matrix.
+
+use rayon::prelude::*;
+
+use crate::forces::bending::bending;
+use crate::forces::membrane::membrane;
+use crate::forces::wind::{wind_face, Wind};
+use crate::forces::{Projection, RestState};
+use crate::math::{Mat12, Mat3, Real, Vec12, Vec3, Vec9};
+use crate::mesh::Mesh;
+use crate::scene::material::Material;
+
+use super::pattern::NONE;
+use super::{ImplicitSystem, SolveError};
+
+/// Elements processed per parallel chunk (bounds the memory of local matrices).
+const CHUNK: usize = 4096;
+
+/// Everything one step's system depends on.
+pub struct StepInput<'a> {
+    pub mesh: &'a Mesh,
+    pub rest: &'a RestState,
+    pub materials: &'a [Material],
+    pub h: Real,
+    pub gravity: Vec3,
+    pub wind: Option<&'a Wind>,
+    /// For each node: `Some(v)` if its velocity at the end of the step is prescribed.
+    pub pinned: &'a [Option<Vec3>],
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct StepOutput {
+    pub dv: Vec<Vec3>,
+    /// Elastic (membrane + bending) energy at the start of the step (J).
+    pub elastic_energy: Real,
+    pub assemble_s: f64,
+    pub factor_s: f64,
+    pub solve_s: f64,
+}
+
+struct Local<const N: usize, const M: usize> {
+    energy: Real,
+    rhs: nalgebra::SVector<Real, M>,
+    mat: nalgebra::SMatrix<Real, M, M>,
+}
+
+fn face_local(inp: &StepInput, f: usize) -> Local<3, 9> {
+    let mesh = inp.mesh;
+    let ids = mesh.face_nodes(f);
+    let x = ids.map(|n| mesh.nodes[n].x);
+    let v = ids.map(|n| mesh.nodes[n].v);
+    let m = &inp.materials[mesh.faces[f].material as usize];
+    let h = inp.h;
+    let (energy, grad, hess) = membrane(&x, &inp.rest.membrane[f], &m.membrane, Projection::Psd);
+    let vl = Vec9::from_fn(|r, _| v[r / 3][r % 3]);
+    // b = h(f − (α + h) K v), A = (hα + h²) K.
+    let mut rhs = -h * grad - h * (m.damping + h) * (hess * vl);
+    let mut mat = (h * m.damping + h * h) * hess;
+    if let Some(w) = inp.wind {
+        let (fw, dfdv) = wind_face(&x, &v, w);
+        for i in 0..3 {
+            for d in 0..3 {
+                rhs[3 * i + d] += h * fw[d];
+            }
+            for j in 0..3 {
+                let mut blk = mat.fixed_view_mut::<3, 3>(3 * i, 3 * j);
+                blk -= h * dfdv;
+            }
+        }
+    }
+    Local { energy, rhs, mat }
+}
+
+fn hinge_local(inp: &StepInput, k: usize) -> Local<4, 12> {
+    let hinge = &inp.rest.hinges[k];
+    let x = hinge.nodes.map(|n| inp.mesh.nodes[n].x);
+    let m = &inp.materials[hinge.material];
+    let h = inp.h;
+    let (energy, grad, hess) = bending(&x, &hinge.rest, m.bending, Projection::Psd);
+    let vl = Vec12::from_fn(|r, _| inp.mesh.nodes[hinge.nodes[r / 3]].v[r % 3]);
+    let rhs = -h * grad - h * (m.damping + h) * (hess * vl);
+    let mat: Mat12 = (h * m.damping + h * h) * hess;
+    Local { energy, rhs, mat }
+}
+
+fn scatter<const N: usize, const M: usize>(
+    blocks: &mut [Mat3],
+    rhs: &mut [Vec3],
+    nodes: &[usize; N],
+    slots: &[usize],
+    local: &Local<N, M>,
+) {
+    for i in 0..N {
+        rhs[nodes[i]] += local.rhs.fixed_rows::<3>(3 * i);
+        for j in 0..N {
+            let s = slots[i * N + j];
+            if s != NONE {
+                blocks[s] += local.mat.fixed_view::<3, 3>(3 * i, 3 * j);
+            }
+        }
+    }
+}
+
+impl ImplicitSystem {
+    /// Assembles, factorises and solves one step's system; returns Δv.
+    pub fn solve_step(&mut self, inp: &StepInput) -> Result<StepOutput, SolveError> {
+        let t0 = std::time::Instant::now();
+        let energy = self.assemble(inp);
+        let t1 = std::time::Instant::now();
+        let blocks = &self.blocks;
+        self.values
+            .par_iter_mut()
+            .zip(self.csc.src.par_iter())
+            .for_each(|(v, &s)| {
+                let b = &blocks[s / 9];
+                *v = b[((s % 9) / 3, s % 3)];
+            });
+        self.chol.factor(&self.csc, &self.values)?;
+        let t2 = std::time::Instant::now();
+        let mut x: Vec<f64> = self.rhs.iter().flat_map(|r| [r.x, r.y, r.z]).collect();
+        self.chol.solve(&mut x);
+        let dv = x
+            .chunks_exact(3)
+            .map(|c| Vec3::new(c[0], c[1], c[2]))
+            .collect();
+        let t3 = std::time::Instant::now();
+        Ok(StepOutput {
+            dv,
+            elastic_energy: energy,
+            assemble_s: (t1 - t0).as_secs_f64(),
+            factor_s: (t2 - t1).as_secs_f64(),
+            solve_s: (t3 - t2).as_secs_f64(),
+        })
+    }
+
+    /// Fills `blocks` and `rhs`; returns the elastic energy.
+    fn assemble(&mut self, inp: &StepInput) -> Real {
+        let mesh = inp.mesh;
+        self.blocks.iter_mut().for_each(|b| *b = Mat3::zeros());
+        for (r, n) in self.rhs.iter_mut().zip(&mesh.nodes) {
+            *r = inp.h * n.mass * inp.gravity;
+        }
+        for b in 0..self.pattern.nodes {
+            // The diagonal block is first in its column.
+            self.blocks[self.pattern.col_start[b]] += Mat3::identity() * mesh.nodes[b].mass;
+        }
+        let mut energy = 0.0;
+        let nf = mesh.faces.len();
+        for start in (0..nf).step_by(CHUNK) {
+            let locals: Vec<Local<3, 9>> = (start..(start + CHUNK).min(nf))
+                .into_par_iter()
+                .map(|f| face_local(inp, f))
+                .collect();
+            for (k, local) in locals.iter().enumerate() {
+                let f = start + k;
+                energy += local.energy;
+                scatter(
+                    &mut self.blocks,
+                    &mut self.rhs,
+                    &mesh.face_nodes(f),
+                    &self.pattern.face_slots[f],
+                    local,
+                );
+            }
+        }
+        let nh = inp.rest.hinges.len();
+        for start in (0..nh).step_by(CHUNK) {
+            let locals: Vec<Local<4, 12>> = (start..(start + CHUNK).min(nh))
+                .into_par_iter()
+                .map(|k| hinge_local(inp, k))
+                .collect();
+            for (j, local) in locals.iter().enumerate() {
+                let k = start + j;
+                energy += local.energy;
+                scatter(
+                    &mut self.blocks,
+                    &mut self.rhs,
+                    &inp.rest.hinges[k].nodes,
+                    &self.pattern.hinge_slots[k],
+                    local,
+                );
+            }
+        }
+        self.eliminate_pinned(inp);
+        energy
+    }
+
+    /// Dirichlet elimination: a pinned node's Δv is prescribed; its coupling moves to the right
+    /// side of its neighbours' rows and its own row becomes the identity.
+    fn eliminate_pinned(&mut self, inp: &StepInput) {
+        let dv: Vec<Option<Vec3>> = inp
+            .pinned
+            .iter()
+            .zip(&inp.mesh.nodes)
+            .map(|(p, n)| p.map(|v| v - n.v))
+            .collect();
+        if dv.iter().all(Option::is_none) {
+            return;
+        }
+        let p = &self.pattern;
+        for b in 0..p.nodes {
+            for k in p.col_start[b]..p.col_start[b + 1] {
+                let a = p.rows[k];
+                let blk = self.blocks[k];
+                if a == b {
+                    if dv[b].is_some() {
+                        self.blocks[k] = Mat3::identity();
+                    }
+                    continue;
+                }
+                match (dv[a], dv[b]) {
+                    (None, None) => continue,
+                    (None, Some(d)) => self.rhs[a] -= blk * d,
+                    (Some(d), None) => self.rhs[b] -= blk.transpose() * d,
+                    (Some(_), Some(_)) => {}
+                }
+                self.blocks[k] = Mat3::zeros();
+            }
+        }
+        for (r, d) in self.rhs.iter_mut().zip(&dv) {
+            if let Some(d) = d {
+                *r = *d;
+            }
+        }
+    }
+}
