@@ -4,6 +4,7 @@
 //! Modules follow the pipeline: `scene` (input), `mesh` (material and world space), `forces`
 //! (element kernels), `solver` (global implicit system), `sim` (the step and the run), `io`.
 
+pub mod collision;
 pub mod forces;
 pub mod io;
 pub mod math;

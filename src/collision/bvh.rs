@@ -1,0 +1,253 @@
+//! Broad phase: a bounding volume hierarchy over axis-aligned boxes, refit every step and
+//! rebuilt when the primitive count changes. Queries return candidates in a deterministic order.
+
+use crate::math::{Real, Vec3};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Aabb {
+    pub min: Vec3,
+    pub max: Vec3,
+}
+
+impl Aabb {
+    pub fn empty() -> Self {
+        Aabb { min: Vec3::repeat(Real::INFINITY), max: Vec3::repeat(Real::NEG_INFINITY) }
+    }
+
+    pub fn from_points<'a>(pts: impl IntoIterator<Item = &'a Vec3>) -> Self {
+        let mut b = Aabb::empty();
+        for p in pts {
+            b.add_point(p);
+        }
+        b
+    }
+
+    pub fn add_point(&mut self, p: &Vec3) {
+        self.min = self.min.inf(p);
+        self.max = self.max.sup(p);
+    }
+
+    pub fn merge(&self, o: &Aabb) -> Aabb {
+        Aabb { min: self.min.inf(&o.min), max: self.max.sup(&o.max) }
+    }
+
+    pub fn inflate(&self, r: Real) -> Aabb {
+        Aabb { min: self.min.add_scalar(-r), max: self.max.add_scalar(r) }
+    }
+
+    #[inline]
+    pub fn overlaps(&self, o: &Aabb) -> bool {
+        self.min.x <= o.max.x
+            && o.min.x <= self.max.x
+            && self.min.y <= o.max.y
+            && o.min.y <= self.max.y
+            && self.min.z <= o.max.z
+            && o.min.z <= self.max.z
+    }
+
+    fn center(&self) -> Vec3 {
+        0.5 * (self.min + self.max)
+    }
+}
+
+const LEAF_SIZE: usize = 4;
+
+#[derive(Clone, Debug)]
+struct Node {
+    aabb: Aabb,
+    /// Leaf (count > 0): primitives `order[start..start + count]`; inner: children `left`, `right`.
+    start: u32,
+    count: u32,
+    left: u32,
+    right: u32,
+}
+
+/// A BVH over primitives given by their boxes. Nodes are stored parents before children, so a
+/// reverse sweep refits bottom-up.
+#[derive(Clone, Debug, Default)]
+pub struct Bvh {
+    nodes: Vec<Node>,
+    order: Vec<u32>,
+}
+
+impl Bvh {
+    /// Builds by median split along the longest axis of the primitive centres.
+    pub fn build(boxes: &[Aabb]) -> Self {
+        let mut bvh = Bvh { nodes: Vec::with_capacity(2 * boxes.len() / LEAF_SIZE + 1), order: (0..boxes.len() as u32).collect() };
+        if !boxes.is_empty() {
+            bvh.build_node(boxes, 0, boxes.len());
+        }
+        bvh
+    }
+
+    fn build_node(&mut self, boxes: &[Aabb], start: usize, end: usize) -> u32 {
+        let id = self.nodes.len() as u32;
+        let aabb = self.order[start..end].iter().fold(Aabb::empty(), |a, &i| a.merge(&boxes[i as usize]));
+        self.nodes.push(Node { aabb, start: start as u32, count: (end - start) as u32, left: 0, right: 0 });
+        if end - start <= LEAF_SIZE {
+            return id;
+        }
+        let centers = self.order[start..end].iter().fold(Aabb::empty(), |mut a, &i| {
+            a.add_point(&boxes[i as usize].center());
+            a
+        });
+        let ext = centers.max - centers.min;
+        let axis = if ext.x >= ext.y && ext.x >= ext.z { 0 } else if ext.y >= ext.z { 1 } else { 2 };
+        let mid = (start + end) / 2;
+        self.order[start..end].select_nth_unstable_by(mid - start, |&a, &b| {
+            let (ca, cb) = (boxes[a as usize].center()[axis], boxes[b as usize].center()[axis]);
+            ca.total_cmp(&cb).then(a.cmp(&b))
+        });
+        let left = self.build_node(boxes, start, mid);
+        let right = self.build_node(boxes, mid, end);
+        let n = &mut self.nodes[id as usize];
+        (n.count, n.left, n.right) = (0, left, right);
+        id
+    }
+
+    pub fn len(&self) -> usize {
+        self.order.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.order.is_empty()
+    }
+
+    /// Refits the boxes for new primitive boxes (same primitives, same tree).
+    pub fn refit(&mut self, boxes: &[Aabb]) {
+        for i in (0..self.nodes.len()).rev() {
+            let n = &self.nodes[i];
+            let aabb = if n.count > 0 {
+                let (s, c) = (n.start as usize, n.count as usize);
+                self.order[s..s + c].iter().fold(Aabb::empty(), |a, &p| a.merge(&boxes[p as usize]))
+            } else {
+                self.nodes[n.left as usize].aabb.merge(&self.nodes[n.right as usize].aabb)
+            };
+            self.nodes[i].aabb = aabb;
+        }
+    }
+
+    /// Calls `f(primitive)` for every primitive whose box overlaps `q`.
+    pub fn query(&self, q: &Aabb, boxes: &[Aabb], mut f: impl FnMut(usize)) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack = vec![0u32];
+        while let Some(i) = stack.pop() {
+            let n = &self.nodes[i as usize];
+            if !n.aabb.overlaps(q) {
+                continue;
+            }
+            if n.count > 0 {
+                for &p in &self.order[n.start as usize..(n.start + n.count) as usize] {
+                    if boxes[p as usize].overlaps(q) {
+                        f(p as usize);
+                    }
+                }
+            } else {
+                stack.push(n.right);
+                stack.push(n.left);
+            }
+        }
+    }
+
+    /// Every pair (a, b), a from `self`, b from `other`, whose boxes overlap.
+    pub fn pairs(&self, boxes: &[Aabb], other: &Bvh, other_boxes: &[Aabb]) -> Vec<(usize, usize)> {
+        let mut out = Vec::new();
+        if self.nodes.is_empty() || other.nodes.is_empty() {
+            return out;
+        }
+        let mut stack = vec![(0u32, 0u32)];
+        while let Some((i, j)) = stack.pop() {
+            let (a, b) = (&self.nodes[i as usize], &other.nodes[j as usize]);
+            if !a.aabb.overlaps(&b.aabb) {
+                continue;
+            }
+            match (a.count > 0, b.count > 0) {
+                (true, true) => {
+                    for &p in &self.order[a.start as usize..(a.start + a.count) as usize] {
+                        for &q in &other.order[b.start as usize..(b.start + b.count) as usize] {
+                            if boxes[p as usize].overlaps(&other_boxes[q as usize]) {
+                                out.push((p as usize, q as usize));
+                            }
+                        }
+                    }
+                }
+                (false, true) => {
+                    stack.push((a.right, j));
+                    stack.push((a.left, j));
+                }
+                (true, false) => {
+                    stack.push((i, b.right));
+                    stack.push((i, b.left));
+                }
+                (false, false) => {
+                    stack.push((a.right, b.right));
+                    stack.push((a.right, b.left));
+                    stack.push((a.left, b.right));
+                    stack.push((a.left, b.left));
+                }
+            }
+        }
+        out.sort_unstable();
+        out
+    }
+
+    /// Every unordered pair (a < b) of this tree's primitives whose boxes overlap.
+    pub fn self_pairs(&self, boxes: &[Aabb]) -> Vec<(usize, usize)> {
+        let mut out: Vec<(usize, usize)> =
+            self.pairs(boxes, self, boxes).into_iter().filter(|(a, b)| a < b).collect();
+        out.dedup();
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn boxes(n: usize, seed: u64) -> Vec<Aabb> {
+        let mut s = seed;
+        let mut rnd = || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (s >> 11) as f64 / (1u64 << 53) as f64
+        };
+        (0..n)
+            .map(|_| {
+                let c = Vec3::new(rnd(), rnd(), rnd());
+                Aabb { min: c, max: c + Vec3::repeat(0.05 * rnd()) }
+            })
+            .collect()
+    }
+
+    fn brute(a: &[Aabb], b: &[Aabb]) -> Vec<(usize, usize)> {
+        let mut v = Vec::new();
+        for (i, x) in a.iter().enumerate() {
+            for (j, y) in b.iter().enumerate() {
+                if x.overlaps(y) {
+                    v.push((i, j));
+                }
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn pairs_match_brute_force_after_refit() {
+        let a = boxes(300, 1);
+        let b = boxes(200, 2);
+        let (mut ta, tb) = (Bvh::build(&a), Bvh::build(&b));
+        assert_eq!(ta.pairs(&a, &tb, &b), brute(&a, &b));
+        let moved: Vec<Aabb> = a.iter().map(|x| Aabb { min: x.min * 0.7, max: x.max * 0.7 }).collect();
+        ta.refit(&moved);
+        assert_eq!(ta.pairs(&moved, &tb, &b), brute(&moved, &b));
+        let selfp = ta.self_pairs(&moved);
+        let want: Vec<_> = brute(&moved, &moved).into_iter().filter(|(i, j)| i < j).collect();
+        assert_eq!(selfp, want);
+        let mut hits = Vec::new();
+        ta.query(&b[0], &moved, |p| hits.push(p));
+        hits.sort_unstable();
+        let want: Vec<_> = (0..moved.len()).filter(|&i| moved[i].overlaps(&b[0])).collect();
+        assert_eq!(hits, want);
+    }
+}

@@ -1,0 +1,5 @@
+//! Obstacles and collisions: broad phase, proximity repulsion, continuous collision detection
+//! and impact-zone resolution.
+
+pub mod bvh;
+pub mod impact_zones;
