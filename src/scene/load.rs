@@ -5,8 +5,8 @@ use std::path::{Path, PathBuf};
 
 use super::material::resolve;
 use super::motion::{Keyframe, Motion, Transform};
-use super::spec::{ClothSpec, HandleSpec, KeyframeSpec, ObstacleSpec, SceneSpec, TransformSpec};
-use super::{Cloth, Handle, InputError, Obstacle, ObstacleShape, Scene};
+use super::spec::{ClothSpec, CollisionSpec, HandleSpec, KeyframeSpec, ObstacleSpec, SceneSpec, TransformSpec};
+use super::{Cloth, CollisionParams, Handle, InputError, Obstacle, ObstacleShape, Scene};
 use crate::forces::wind::Wind;
 use crate::io::obj::{read_obj, ObjData};
 use crate::math::{cross2, Vec2, Vec3};
@@ -161,6 +161,7 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
         mesh: Mesh::default(),
         handles: Vec::new(),
         obstacles: Vec::new(),
+        collision: collision_params(ctx, spec.collision.as_ref())?,
     };
     for (c, cs) in spec.cloths.iter().enumerate() {
         add_cloth(ctx, &mut scene, c, cs)?;
@@ -176,6 +177,37 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
         scene.obstacles.push(obstacle);
     }
     Ok(scene)
+}
+
+fn collision_params(ctx: &Ctx, spec: Option<&CollisionSpec>) -> Res<CollisionParams> {
+    let mut p = CollisionParams::default();
+    let Some(c) = spec else { return Ok(p) };
+    if let Some(t) = c.thickness {
+        p.thickness = positive(ctx, "collision.thickness", t)?;
+        p.push_out_tolerance = 3.0 * p.thickness;
+    }
+    if let Some(k) = c.stiffness {
+        p.stiffness = positive(ctx, "collision.stiffness", k)?;
+    }
+    if let Some(m) = c.friction {
+        p.friction = non_negative(ctx, "collision.friction", m)?;
+    }
+    if let Some(m) = c.self_friction {
+        p.self_friction = non_negative(ctx, "collision.self_friction", m)?;
+    }
+    if let Some(b) = c.self_collision {
+        p.self_collision = b;
+    }
+    if let Some(n) = c.max_iterations {
+        if !(1..=100_000).contains(&n) {
+            return Err(ctx.err("collision.max_iterations", format!("expected an integer in 1..=100000, got {n}")));
+        }
+        p.max_iterations = n as usize;
+    }
+    if let Some(t) = c.push_out_tolerance {
+        p.push_out_tolerance = non_negative(ctx, "collision.push_out_tolerance", t)?;
+    }
+    Ok(p)
 }
 
 fn non_negative(ctx: &Ctx, path: &str, v: f64) -> Res<f64> {

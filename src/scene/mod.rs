@@ -88,6 +88,34 @@ pub struct Obstacle {
     pub motion: Option<Motion>,
 }
 
+/// Collision parameters (scene `collision` block, with defaults).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CollisionParams {
+    /// Repulsion thickness (m).
+    pub thickness: Real,
+    /// Repulsion stiffness per unit area (N/m³).
+    pub stiffness: Real,
+    pub friction: Real,
+    pub self_friction: Real,
+    pub self_collision: bool,
+    pub max_iterations: usize,
+    pub push_out_tolerance: Real,
+}
+
+impl Default for CollisionParams {
+    fn default() -> Self {
+        CollisionParams {
+            thickness: 5e-3,
+            stiffness: 1e6,
+            friction: 0.3,
+            self_friction: 0.3,
+            self_collision: true,
+            max_iterations: 100,
+            push_out_tolerance: 15e-3,
+        }
+    }
+}
+
 /// A validated, runnable scene.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -103,6 +131,7 @@ pub struct Scene {
     pub mesh: Mesh,
     pub handles: Vec<Handle>,
     pub obstacles: Vec<Obstacle>,
+    pub collision: CollisionParams,
 }
 
 impl Scene {

@@ -36,6 +36,36 @@ pub struct SceneSpec {
     pub cloths: Vec<ClothSpec>,
     #[serde(default)]
     pub obstacles: Vec<ObstacleSpec>,
+    /// Collision handling; defaults apply when absent.
+    #[serde(default)]
+    pub collision: Option<CollisionSpec>,
+}
+
+#[derive(Deserialize, Debug, Clone, Default)]
+#[serde(deny_unknown_fields)]
+pub struct CollisionSpec {
+    /// Repulsion thickness (m): contacts closer than this are pushed apart.
+    #[serde(default)]
+    pub thickness: Option<f64>,
+    /// Repulsion stiffness per unit area (N/m³); a contact's stiffness is this × its area.
+    #[serde(default)]
+    pub stiffness: Option<f64>,
+    /// Coulomb friction coefficient cloth–obstacle.
+    #[serde(default)]
+    pub friction: Option<f64>,
+    /// Coulomb friction coefficient cloth–cloth.
+    #[serde(default)]
+    pub self_friction: Option<f64>,
+    /// Cloth–cloth collisions on/off (default on).
+    #[serde(default)]
+    pub self_collision: Option<bool>,
+    /// Cap on impact-zone iterations per step (default 100).
+    #[serde(default)]
+    pub max_iterations: Option<i64>,
+    /// Cloth nodes up to this deep inside an obstacle at load are pushed out (m, default 3 ×
+    /// thickness); deeper is an error.
+    #[serde(default)]
+    pub push_out_tolerance: Option<f64>,
 }
 
 fn default_gravity() -> [f64; 3] {
