@@ -3,3 +3,4 @@
 
 pub mod bvh;
 pub mod impact_zones;
+pub mod friction;
