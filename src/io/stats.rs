@@ -18,6 +18,26 @@ pub struct FrameStats {
     pub max_strain: f64,
     pub mean_strain: f64,
     pub steps: usize,
+    /// Present when the collision stages ran.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub collision: Option<CollisionFrameStats>,
+}
+
+/// Collision counters of one frame (summed over its steps).
+#[derive(Serialize, Debug, Clone, Default, PartialEq)]
+pub struct CollisionFrameStats {
+    /// Repulsion contacts in the implicit solves.
+    pub contacts: usize,
+    /// Impacts found by continuous collision detection.
+    pub impacts: usize,
+    pub impact_zones: usize,
+    pub ccd_iterations: usize,
+    /// Steps whose impact-zone loop hit `collision.max_iterations` with collisions left.
+    pub ccd_cap_hits: usize,
+    /// Zones whose projection had no solution.
+    pub failed_zones: usize,
+    /// Cloth nodes deeper than thickness/2 inside an obstacle at the frame end (must be 0).
+    pub penetrations: usize,
 }
 
 #[derive(Serialize, Debug, Clone, Default)]

@@ -176,6 +176,10 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
         let obstacle = load_obstacle(ctx, o, os)?;
         scene.obstacles.push(obstacle);
     }
+    // Without obstacles a scene does no collision work unless it asks for self-collision.
+    if spec.collision.as_ref().and_then(|c| c.self_collision).is_none() {
+        scene.collision.self_collision = !scene.obstacles.is_empty();
+    }
     Ok(scene)
 }
 
@@ -602,6 +606,7 @@ fn load_obstacle(ctx: &Ctx, o: usize, os: &ObstacleSpec) -> Res<Obstacle> {
         os.plane.is_some(),
         os.cuboid.is_some(),
         os.capsule.is_some(),
+        os.sequence.is_some(),
     ]
     .iter()
     .filter(|b| **b)
@@ -609,7 +614,7 @@ fn load_obstacle(ctx: &Ctx, o: usize, os: &ObstacleSpec) -> Res<Obstacle> {
     if count != 1 {
         return Err(ctx.err(
             &path,
-            "expected exactly one shape: mesh, sphere, plane, box or capsule",
+            "expected exactly one shape: mesh, sphere, plane, box, capsule or sequence",
         ));
     }
     let shape = if let Some(file) = &os.mesh {
@@ -642,6 +647,8 @@ fn load_obstacle(ctx: &Ctx, o: usize, os: &ObstacleSpec) -> Res<Obstacle> {
             radius: positive(ctx, &format!("{path}.capsule.radius"), c.radius)?,
             length: non_negative(ctx, &format!("{path}.capsule.length"), c.length)?,
         }
+    } else if let Some(seq) = &os.sequence {
+        ObstacleShape::Sequence(load_sequence(ctx, &format!("{path}.sequence"), seq)?)
     } else {
         unreachable!("count == 1 checked above")
     };
@@ -655,4 +662,90 @@ fn load_obstacle(ctx: &Ctx, o: usize, os: &ObstacleSpec) -> Res<Obstacle> {
             .map(|m| motion(ctx, &format!("{path}.motion"), m))
             .transpose()?,
     })
+}
+
+/// Reads every file of a per-frame OBJ sequence; all must share the first file's vertex count
+/// and faces.
+fn load_sequence(ctx: &Ctx, path: &str, seq: &super::spec::SequenceSpec) -> Res<super::MeshSequence> {
+    let fps = positive(ctx, &format!("{path}.fps"), seq.fps)?;
+    if !seq.start_time.is_finite() {
+        return Err(ctx.err(format!("{path}.start_time"), "expected a finite time"));
+    }
+    if !(1..=1_000_000).contains(&seq.count) {
+        let msg = format!("expected an integer in 1..=1000000, got {}", seq.count);
+        return Err(ctx.err(format!("{path}.count"), msg));
+    }
+    if seq.first < 0 {
+        let msg = format!("expected an integer ≥ 0, got {}", seq.first);
+        return Err(ctx.err(format!("{path}.first"), msg));
+    }
+    let mut mesh: Option<ObjData> = None;
+    let mut frames = Vec::with_capacity(seq.count as usize);
+    for k in 0..seq.count {
+        let name = format_frame(&seq.pattern, seq.first + k)
+            .map_err(|msg| ctx.err(format!("{path}.pattern"), msg))?;
+        let full = ctx.resolve(&name);
+        let data = read_obj(&full).map_err(|msg| InputError {
+            file: full.clone(),
+            location: None,
+            msg,
+        })?;
+        let file_err = |msg: String| InputError {
+            file: full.clone(),
+            location: None,
+            msg,
+        };
+        if let Some(m) = &mesh {
+            if data.positions.len() != m.positions.len() {
+                return Err(file_err(format!(
+                    "sequence frame has {} vertices, expected {} as in the first frame",
+                    data.positions.len(),
+                    m.positions.len()
+                )));
+            }
+            let same_faces = data.triangles.len() == m.triangles.len()
+                && data
+                    .triangles
+                    .iter()
+                    .zip(&m.triangles)
+                    .all(|(a, b)| a.map(|c| c.v) == b.map(|c| c.v));
+            if !same_faces {
+                return Err(file_err(
+                    "sequence frame has different faces from the first frame".into(),
+                ));
+            }
+        } else if data.triangles.is_empty() {
+            return Err(file_err("the mesh has no faces".into()));
+        }
+        frames.push(data.positions.clone());
+        mesh.get_or_insert(data);
+    }
+    Ok(super::MeshSequence {
+        mesh: mesh.expect("count ≥ 1 checked above"),
+        frames,
+        start_time: seq.start_time,
+        fps,
+    })
+}
+
+/// Substitutes the frame number for the one printf-style `%d` / `%0Nd` in `pattern`.
+fn format_frame(pattern: &str, n: i64) -> Result<String, String> {
+    let bad = || format!("expected one %d or %0Nd (e.g. \"body_%04d.obj\") in \"{pattern}\"");
+    let start = pattern.find('%').ok_or_else(bad)?;
+    let rest = &pattern[start + 1..];
+    let digits = rest.find(|c: char| !c.is_ascii_digit()).ok_or_else(bad)?;
+    if !rest[digits..].starts_with('d') || rest[digits + 1..].contains('%') {
+        return Err(bad());
+    }
+    let width: usize = if digits == 0 {
+        0
+    } else {
+        rest[..digits].parse().map_err(|_| bad())?
+    };
+    let number = if rest.starts_with('0') {
+        format!("{n:0width$}")
+    } else {
+        format!("{n:width$}")
+    };
+    Ok(format!("{}{number}{}", &pattern[..start], &rest[digits + 1..]))
 }

@@ -1,32 +1,36 @@
-//! The simulation: state, the time step as a list of named, timed stages, and frame stats.
+//! The simulation: state, the time step as a list of named, timed stages (`step`), and frame
+//! measurements.
 
 mod run;
+mod step;
 pub mod timers;
 
 pub use run::{run, RunOptions};
 
+use crate::collision::obstacle::ObstacleBody;
+use crate::collision::sdf::MeshSdf;
+use crate::collision::world::{CollisionCounters, CollisionWorld};
 use crate::forces::membrane::{deformation_gradient, max_principal_strain};
 use crate::forces::{edge_angles, RestState};
 use crate::io::stats::FrameStats;
-use crate::math::{Real, Vec3};
+use crate::math::Real;
 use crate::mesh::Mesh;
-use crate::scene::Scene;
+use crate::scene::{InputError, Scene};
 use crate::solver::pattern::BlockPattern;
-use crate::solver::{ImplicitSystem, SolveError, StepInput};
+use crate::solver::{ImplicitSystem, SolveError};
 use timers::StageTimers;
 
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {
     #[error("step {step} (t = {time:.6} s): {source}")]
-    Solve {
-        step: u64,
-        time: Real,
-        source: SolveError,
-    },
+    Solve { step: u64, time: Real, source: SolveError },
     #[error("step {step} (t = {time:.6} s): the state became non-finite (NaN or infinity)")]
     NonFinite { step: u64, time: Real },
     #[error("invalid mesh: {0}")]
     Mesh(String),
+    /// The initial state is not usable (e.g. cloth deep inside an obstacle).
+    #[error("{0}")]
+    Input(InputError),
 }
 
 pub struct Simulation {
@@ -36,9 +40,18 @@ pub struct Simulation {
     rest_angles: Vec<Real>,
     rest: RestState,
     system: ImplicitSystem,
+    /// Cloth–cloth node pairs added to the base pattern for self contacts.
+    extra_pairs: Vec<(usize, usize)>,
+    /// Present when the scene has obstacles or self-collision.
+    pub collisions: Option<CollisionWorld>,
+    /// Per node: a third of the adjacent faces' material area (m²), scaling contact stiffness.
+    node_area: Vec<Real>,
+    pub counters: CollisionCounters,
     pub time: Real,
     pub steps: u64,
     pub timers: StageTimers,
+    /// Cloth nodes pushed out of obstacles at load.
+    pub pushed_out: usize,
 }
 
 impl Simulation {
@@ -47,103 +60,74 @@ impl Simulation {
         let rest_angles = edge_angles(&mesh);
         let rest = RestState::new(&mesh, |e| rest_angles[e])
             .map_err(|f| SimError::Mesh(format!("face {f} is degenerate in material space")))?;
-        let system =
-            ImplicitSystem::new(BlockPattern::new(&mesh, &rest.hinges)).map_err(|source| {
-                SimError::Solve {
-                    step: 0,
-                    time: 0.0,
-                    source,
-                }
-            })?;
-        Ok(Simulation {
+        let system = ImplicitSystem::new(BlockPattern::new(&mesh, &rest.hinges, &[]))
+            .map_err(|source| SimError::Solve { step: 0, time: 0.0, source })?;
+        let mut node_area = vec![0.0; mesh.nodes.len()];
+        for f in 0..mesh.faces.len() {
+            for n in mesh.face_nodes(f) {
+                node_area[n] += rest.membrane[f].area / 3.0;
+            }
+        }
+        let collisions = (!scene.obstacles.is_empty() || scene.collision.self_collision).then(|| {
+            let bodies = scene.obstacles.iter().map(ObstacleBody::new).collect();
+            CollisionWorld::new(scene.collision.clone(), bodies, 0.0)
+        });
+        let mut sim = Simulation {
             scene,
             mesh,
             rest_angles,
             rest,
             system,
+            extra_pairs: Vec::new(),
+            collisions,
+            node_area,
+            counters: CollisionCounters::default(),
             time: 0.0,
             steps: 0,
             timers: StageTimers::default(),
-        })
+            pushed_out: 0,
+        };
+        sim.push_out_initial()?;
+        Ok(sim)
     }
 
     pub fn rest_angles(&self) -> &[Real] {
         &self.rest_angles
     }
 
-    /// Target velocity of every node held by an active handle at the end of a step to `t1`.
-    fn pinned_velocities(&self, t1: Real, h: Real) -> Vec<Option<Vec3>> {
-        let mut pinned = vec![None; self.mesh.nodes.len()];
-        for handle in self.scene.handles.iter().filter(|hd| hd.active(self.time)) {
-            for (k, &n) in handle.nodes.iter().enumerate() {
-                pinned[n] = Some((handle.target(k, t1) - self.mesh.nodes[n].x) / h);
-            }
-        }
-        pinned
-    }
-
-    /// One implicit step of size `h`.
-    pub fn step(&mut self, h: Real) -> Result<(), SimError> {
-        let t1 = self.time + h;
-        let clock = std::time::Instant::now();
-        let pinned = self.pinned_velocities(t1, h);
-        self.timers.add("handles", clock.elapsed().as_secs_f64());
-        let input = StepInput {
-            mesh: &self.mesh,
-            rest: &self.rest,
-            materials: &self.scene.materials,
-            h,
-            gravity: self.scene.gravity,
-            wind: self.scene.wind.as_ref(),
-            pinned: &pinned,
-        };
-        let out = self
-            .system
-            .solve_step(&input)
-            .map_err(|source| SimError::Solve {
-                step: self.steps,
-                time: self.time,
-                source,
-            })?;
-        self.timers.add("assembly", out.assemble_s);
-        self.timers.add("factorisation", out.factor_s);
-        self.timers.add("solve", out.solve_s);
-        let (time, steps) = (self.time, self.steps);
-        self.timers.time("integration", || {
-            for (i, node) in self.mesh.nodes.iter_mut().enumerate() {
-                node.v += out.dv[i];
-                node.x += h * node.v;
-                if let Some(v) = pinned[i] {
-                    node.v = v;
+    /// Nodes registered slightly inside an obstacle are moved out along its surface normal to
+    /// the repulsion thickness before the first step; deeper than the tolerance is an error.
+    fn push_out_initial(&mut self) -> Result<(), SimError> {
+        let Some(world) = &self.collisions else { return Ok(()) };
+        let (th, tol) = (world.params.thickness, world.params.push_out_tolerance);
+        for (b, body) in world.bodies.iter().enumerate() {
+            let sdf = MeshSdf::new(body.triangles(), &body.positions_at(0.0));
+            let mut too_deep = vec![0usize; self.scene.cloths.len()];
+            let mut moves = Vec::new();
+            for (i, node) in self.mesh.nodes.iter().enumerate() {
+                let Some(q) = sdf.query(&node.x) else { continue };
+                if q.distance < 0.0 {
+                    if -q.distance > tol {
+                        too_deep[node.cloth as usize] += 1;
+                    } else {
+                        moves.push((i, q.point + q.normal * th));
+                    }
                 }
             }
-            // Handles land exactly on their targets (no rounding drift).
-            for handle in self.scene.handles.iter().filter(|hd| hd.active(time)) {
-                for (k, &n) in handle.nodes.iter().enumerate() {
-                    self.mesh.nodes[n].x = handle.target(k, t1);
-                }
+            if let Some(c) = too_deep.iter().position(|&k| k > 0) {
+                return Err(SimError::Input(InputError {
+                    file: format!("scene {}", self.scene.name).into(),
+                    location: Some(format!("cloths[{c}]")),
+                    msg: format!(
+                        "cloth '{}' has {} nodes inside obstacle '{}' deeper than the push-out tolerance {} m (collision.push_out_tolerance)",
+                        self.scene.cloths[c].name, too_deep[c], self.scene.obstacles[b].name, tol
+                    ),
+                }));
             }
-            if self
-                .mesh
-                .nodes
-                .iter()
-                .all(|n| n.x.iter().chain(n.v.iter()).all(|c| c.is_finite()))
-            {
-                Ok(())
-            } else {
-                Err(SimError::NonFinite { step: steps, time })
+            self.pushed_out += moves.len();
+            for (i, p) in moves {
+                self.mesh.nodes[i].x = p;
             }
-        })?;
-        self.time = t1;
-        self.steps += 1;
-        Ok(())
-    }
-
-    /// Advances one frame (the scene's steps per frame).
-    pub fn advance_frame(&mut self) -> Result<(), SimError> {
-        let h = self.scene.time_step();
-        for _ in 0..self.scene.steps_per_frame {
-            self.step(h)?;
         }
         Ok(())
     }
@@ -162,30 +146,27 @@ impl Simulation {
         }
         for hg in &self.rest.hinges {
             let x = hg.nodes.map(|n| m.nodes[n].x);
-            e += bending(
-                &x,
-                &hg.rest,
-                self.scene.materials[hg.material].bending,
-                Projection::Psd,
-            )
-            .0;
+            e += bending(&x, &hg.rest, self.scene.materials[hg.material].bending, Projection::Psd).0;
         }
         e
+    }
+
+    /// Cloth nodes deeper than half the thickness inside an obstacle (should be 0).
+    pub fn penetrations(&self) -> usize {
+        let Some(world) = &self.collisions else { return 0 };
+        let x = self.mesh.positions();
+        world
+            .bodies
+            .iter()
+            .map(|body| MeshSdf::new(body.triangles(), &body.positions_at(self.time)).count_deeper_than(&x, 0.5 * world.params.thickness))
+            .sum()
     }
 
     /// Per-frame measurements (without timings).
     pub fn measure(&self, frame: usize) -> FrameStats {
         let m = &self.mesh;
-        let kinetic: Real = m
-            .nodes
-            .iter()
-            .map(|n| 0.5 * n.mass * n.v.norm_squared())
-            .sum();
-        let potential: Real = m
-            .nodes
-            .iter()
-            .map(|n| -n.mass * self.scene.gravity.dot(&n.x))
-            .sum();
+        let kinetic: Real = m.nodes.iter().map(|n| 0.5 * n.mass * n.v.norm_squared()).sum();
+        let potential: Real = m.nodes.iter().map(|n| -n.mass * self.scene.gravity.dot(&n.x)).sum();
         let (mut max_strain, mut sum, mut area) = (Real::NEG_INFINITY, 0.0, 0.0);
         for f in 0..m.faces.len() {
             let x = m.face_nodes(f).map(|n| m.nodes[n].x);

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use crate::io::obj::frame_obj;
-use crate::io::stats::RunStats;
+use crate::io::stats::{CollisionFrameStats, RunStats};
 use crate::io::write_atomic;
 use crate::scene::Scene;
 
@@ -79,6 +79,20 @@ pub fn run(scene: Scene, opts: &RunOptions) -> Result<RunStats, RunError> {
         }
         write_frame(&mut sim, f)?;
         let mut fs = sim.measure(f);
+        if sim.collisions.is_some() {
+            let clock = Instant::now();
+            let c = std::mem::take(&mut sim.counters);
+            fs.collision = Some(CollisionFrameStats {
+                contacts: c.contacts,
+                impacts: c.impacts,
+                impact_zones: c.impact_zones,
+                ccd_iterations: c.ccd_iterations,
+                ccd_cap_hits: c.cap_hits,
+                failed_zones: c.failed_zones,
+                penetrations: sim.penetrations(),
+            });
+            sim.timers.add("penetration_check", clock.elapsed().as_secs_f64());
+        }
         fs.steps = if f > 0 { sim.scene.steps_per_frame } else { 0 };
         fs.stage_s = sim.timers.take();
         fs.wall_s = clock.elapsed().as_secs_f64();

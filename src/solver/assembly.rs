@@ -5,6 +5,7 @@
 
 use rayon::prelude::*;
 
+use crate::collision::proximity::{repulsion, Contact};
 use crate::forces::bending::bending;
 use crate::forces::membrane::membrane;
 use crate::forces::wind::{wind_face, Wind};
@@ -29,6 +30,10 @@ pub struct StepInput<'a> {
     pub wind: Option<&'a Wind>,
     /// For each node: `Some(v)` if its velocity at the end of the step is prescribed.
     pub pinned: &'a [Option<Vec3>],
+    /// Repulsion contacts (collision proximity), frozen for the step.
+    pub contacts: &'a [Contact],
+    /// Positions of the fixed points (obstacle vertices) that contacts index past the nodes.
+    pub fixed: &'a [Vec3],
 }
 
 #[derive(Clone, Debug, Default)]
@@ -184,8 +189,47 @@ impl ImplicitSystem {
                 );
             }
         }
+        self.add_contacts(inp);
         self.eliminate_pinned(inp);
         energy
+    }
+
+    /// Repulsion contacts enter like elastic elements (without damping):
+    /// A += h² K_c, b += h (−∇E_c − h K_c v) over the cloth nodes; fixed points are constant.
+    fn add_contacts(&mut self, inp: &StepInput) {
+        let n = inp.mesh.nodes.len();
+        let h = inp.h;
+        for c in inp.contacts {
+            let pos = c.nodes.map(|i| if i < n { inp.mesh.nodes[i].x } else { inp.fixed[i - n] });
+            let (_, grad, hess) = repulsion(c, &pos);
+            if grad == Vec12::zeros() {
+                continue;
+            }
+            let vl = Vec12::from_fn(|r, _| {
+                let i = c.nodes[r / 3];
+                if i < n { inp.mesh.nodes[i].v[r % 3] } else { 0.0 }
+            });
+            let rhs = -h * grad - h * h * (hess * vl);
+            for a in 0..4 {
+                let i = c.nodes[a];
+                if i >= n {
+                    continue;
+                }
+                self.rhs[i] += rhs.fixed_rows::<3>(3 * a);
+                for b in 0..4 {
+                    let j = c.nodes[b];
+                    if j >= n || i < j {
+                        continue;
+                    }
+                    // The simulation extends the pattern with contact couplings before the solve.
+                    let blk = self.pattern.block(i, j);
+                    debug_assert!(blk.is_some(), "contact coupling ({i}, {j}) missing from the pattern");
+                    if let Some(blk) = blk {
+                        self.blocks[blk] += h * h * hess.fixed_view::<3, 3>(3 * a, 3 * b);
+                    }
+                }
+            }
+        }
     }
 
     /// Dirichlet elimination: a pinned node's Δv is prescribed; its coupling moves to the right

@@ -20,8 +20,9 @@ pub struct BlockPattern {
 pub const NONE: usize = usize::MAX;
 
 impl BlockPattern {
-    /// The pattern of face couplings plus the wing–wing couplings of `hinges`.
-    pub fn new(mesh: &Mesh, hinges: &[Hinge]) -> Self {
+    /// The pattern of face couplings, the wing–wing couplings of `hinges` and `extra` node pairs
+    /// (cloth–cloth contacts).
+    pub fn new(mesh: &Mesh, hinges: &[Hinge], extra: &[(usize, usize)]) -> Self {
         let n = mesh.nodes.len();
         let mut cols: Vec<Vec<usize>> = (0..n).map(|b| vec![b]).collect();
         let mut add = |a: usize, b: usize| {
@@ -38,6 +39,9 @@ impl BlockPattern {
         }
         for h in hinges {
             add(h.nodes[2], h.nodes[3]);
+        }
+        for &(a, b) in extra {
+            add(a, b);
         }
         let mut col_start = Vec::with_capacity(n + 1);
         let mut rows = Vec::new();

@@ -1,0 +1,345 @@
+//! The collision stages of a step, for one scene: obstacle motion, proximity contacts for the
+//! implicit solve, Coulomb friction, and continuous collision detection with impact zones.
+//!
+//! Index space: cloth nodes are `0..n`; obstacle vertices follow, body after body, as fixed
+//! points `n + k` (infinite mass, prescribed motion).
+
+use rayon::prelude::*;
+
+use super::bvh::{Aabb, Bvh};
+use super::ccd::{edge_edge_ccd, vertex_face_ccd, Impact, CCD_TOLERANCE};
+use super::geometry::closest_point_triangle;
+use super::impact_zones::{resolve_zone, ZoneConstraint, ZoneState};
+use super::obstacle::ObstacleBody;
+use super::proximity::{edge_edge_contact, node_face_contact, Contact};
+use crate::math::{Real, Vec3};
+use crate::mesh::Mesh;
+use crate::scene::CollisionParams;
+
+/// Separation the impact-zone projection enforces, as a fraction of the thickness.
+const ZONE_SEPARATION: Real = 0.1;
+
+/// What the collision stages did in one step (summed over a frame by the caller).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct CollisionCounters {
+    pub contacts: usize,
+    pub impacts: usize,
+    pub impact_zones: usize,
+    pub ccd_iterations: usize,
+    /// Steps whose impact-zone loop stopped at the iteration cap with collisions left.
+    pub cap_hits: usize,
+    /// Zones whose projection had no solution.
+    pub failed_zones: usize,
+}
+
+pub struct CollisionWorld {
+    pub params: CollisionParams,
+    pub bodies: Vec<ObstacleBody>,
+    /// Obstacle triangles in fixed-point numbering (offset by body, not by cloth node count).
+    obs_tris: Vec<[usize; 3]>,
+    /// First fixed-point index of each body, and the total at the end.
+    body_start: Vec<usize>,
+    /// Obstacle vertex positions at the start and end of the current step.
+    pub obs_x0: Vec<Vec3>,
+    pub obs_x1: Vec<Vec3>,
+    obs_bvh: Option<Bvh>,
+    cloth_bvh: Option<(usize, Bvh)>,
+}
+
+impl CollisionWorld {
+    pub fn new(params: CollisionParams, bodies: Vec<ObstacleBody>, t: Real) -> Self {
+        let mut obs_tris = Vec::new();
+        let mut body_start = vec![0];
+        for b in &bodies {
+            let offset = body_start[body_start.len() - 1];
+            obs_tris.extend(b.triangles().iter().map(|t| t.map(|i| i + offset)));
+            body_start.push(offset + b.vertex_count());
+        }
+        let mut w = CollisionWorld {
+            params,
+            bodies,
+            obs_tris,
+            body_start,
+            obs_x0: Vec::new(),
+            obs_x1: Vec::new(),
+            obs_bvh: None,
+            cloth_bvh: None,
+        };
+        w.obs_x1 = w.positions_at(t);
+        w.obs_x0 = w.obs_x1.clone();
+        w
+    }
+
+    fn positions_at(&self, t: Real) -> Vec<Vec3> {
+        self.bodies.iter().flat_map(|b| b.positions_at(t)).collect()
+    }
+
+    /// Moves the obstacles to the step `[t0, t1]`.
+    pub fn advance(&mut self, t0: Real, t1: Real) {
+        self.obs_x0 = self.positions_at(t0);
+        self.obs_x1 = self.positions_at(t1);
+    }
+
+    /// Velocities of obstacle vertices over the current step of length `h`.
+    pub fn obstacle_velocities(&self, h: Real) -> Vec<Vec3> {
+        self.obs_x0.iter().zip(&self.obs_x1).map(|(a, b)| (b - a) / h).collect()
+    }
+
+    fn obstacle_boxes(&self, pad: Real, swept: bool) -> Vec<Aabb> {
+        self.obs_tris
+            .iter()
+            .map(|t| {
+                let mut b = Aabb::from_points(t.iter().map(|&i| &self.obs_x1[i]));
+                if swept {
+                    b = b.merge(&Aabb::from_points(t.iter().map(|&i| &self.obs_x0[i])));
+                }
+                b.inflate(pad)
+            })
+            .collect()
+    }
+
+    /// The obstacle tree refit to `boxes` (taken out; the caller puts it back).
+    fn obstacle_tree(&mut self, boxes: &[Aabb]) -> Bvh {
+        match self.obs_bvh.take() {
+            Some(mut t) if t.len() == boxes.len() => {
+                t.refit(boxes);
+                t
+            }
+            _ => Bvh::build(boxes),
+        }
+    }
+
+    fn cloth_tree(&mut self, boxes: &[Aabb], faces: usize) -> Bvh {
+        match self.cloth_bvh.take() {
+            Some((n, mut t)) if n == faces => {
+                t.refit(boxes);
+                t
+            }
+            _ => Bvh::build(boxes),
+        }
+    }
+
+    /// Candidate primitive pairs (kind 0 vertex–face, 1 edge–edge) from the face pairs whose
+    /// boxes overlap: cloth against obstacles and, with self-collision on, cloth against cloth.
+    /// Sorted and unique.
+    fn candidates(&mut self, mesh: &Mesh, face_boxes: &[Aabb], obs_boxes: &[Aabb]) -> Vec<(u8, [usize; 4])> {
+        let n = mesh.nodes.len();
+        let cloth_tree = self.cloth_tree(face_boxes, mesh.faces.len());
+        let mut keys: Vec<(u8, [usize; 4])> = Vec::new();
+        if !self.obs_tris.is_empty() {
+            let obs_tree = self.obstacle_tree(obs_boxes);
+            for (cf, of) in cloth_tree.pairs(face_boxes, &obs_tree, obs_boxes) {
+                let c = mesh.face_nodes(cf);
+                let o = self.obs_tris[of].map(|i| i + n);
+                for &p in &c {
+                    keys.push((0, [p, o[0], o[1], o[2]]));
+                }
+                for &p in &o {
+                    keys.push((0, [p, c[0], c[1], c[2]]));
+                }
+                for k in 0..3 {
+                    for l in 0..3 {
+                        let (a, b) = ((c[k], c[(k + 1) % 3]), (o[l], o[(l + 1) % 3]));
+                        keys.push((1, [a.0.min(a.1), a.0.max(a.1), b.0.min(b.1), b.0.max(b.1)]));
+                    }
+                }
+            }
+            self.obs_bvh = Some(obs_tree);
+        }
+        if self.params.self_collision {
+            for (f, g) in cloth_tree.self_pairs(face_boxes) {
+                push_self_keys(&mut keys, &mesh.face_nodes(f), &mesh.face_nodes(g));
+            }
+        }
+        self.cloth_bvh = Some((mesh.faces.len(), cloth_tree));
+        keys.sort_unstable();
+        keys.dedup();
+        keys
+    }
+
+    /// Repulsion contacts at the start of a step: cloth against obstacles (at the end of the
+    /// step, so an obstacle moving in is felt) and, with self-collision on, cloth against cloth.
+    pub fn proximity(&mut self, mesh: &Mesh, contact_area: &[Real]) -> Vec<Contact> {
+        let th = self.params.thickness;
+        let n = mesh.nodes.len();
+        let x: Vec<Vec3> = mesh.positions();
+        let face_boxes: Vec<Aabb> = (0..mesh.faces.len())
+            .map(|f| Aabb::from_points(mesh.face_nodes(f).iter().map(|&i| &x[i])).inflate(th))
+            .collect();
+        let obs_boxes = self.obstacle_boxes(0.0, false);
+        let keys = self.candidates(mesh, &face_boxes, &obs_boxes);
+        let pos = |i: usize| if i < n { x[i] } else { self.obs_x1[i - n] };
+        let k_area = self.params.stiffness;
+        let mut contacts: Vec<Contact> = keys
+            .par_iter()
+            .filter_map(|&(kind, nodes)| {
+                let xs = nodes.map(pos);
+                let area = nodes.iter().filter(|&&i| i < n).map(|&i| contact_area[i]).fold(0.0, Real::max);
+                let k = k_area * area;
+                match kind {
+                    0 if nodes[0] < n && nodes[1] >= n => self.obstacle_face_contact(nodes, &xs, k),
+                    0 => node_face_contact(nodes, &xs, th, k),
+                    _ => edge_edge_contact(nodes, &xs, th, k),
+                }
+            })
+            .collect();
+        // One node–face contact per (cloth node, obstacle body) is enough (ARCSim keeps the
+        // nearest face per node): faces sharing an edge would otherwise push twice.
+        let body = |c: &Contact| {
+            let is_node_obstacle = c.nodes[0] < n && c.nodes[1] >= n && c.w[0] == 1.0;
+            is_node_obstacle.then(|| self.body_start.partition_point(|&s| s <= c.nodes[1] - n))
+        };
+        contacts.dedup_by(|b, a| {
+            let same = a.nodes[0] == b.nodes[0] && body(a).is_some() && body(a) == body(b);
+            if same && b.gap(&b.nodes.map(pos)) < a.gap(&a.nodes.map(pos)) {
+                *a = *b;
+            }
+            same
+        });
+        contacts
+    }
+
+    /// Cloth node against an obstacle face: the obstacle's outward normal decides the side, so a
+    /// node that is slightly inside is pushed out, not further in.
+    fn obstacle_face_contact(&self, nodes: [usize; 4], x: &[Vec3; 4], k: Real) -> Option<Contact> {
+        let th = self.params.thickness;
+        let cl = closest_point_triangle(&x[0], &x[1], &x[2], &x[3]);
+        let outward = (x[2] - x[1]).cross(&(x[3] - x[1])).try_normalize(0.0)?;
+        let side = (x[0] - cl.point).dot(&outward);
+        if cl.dist >= th && side >= 0.0 {
+            return None;
+        }
+        if side < 0.0 && !cl.interior {
+            // Behind the face but beside it: another face of the obstacle is nearer.
+            return None;
+        }
+        let n = if cl.interior || cl.dist == 0.0 { outward } else { (x[0] - cl.point) / cl.dist };
+        Some(Contact { nodes, w: [1.0, -cl.bary[0], -cl.bary[1], -cl.bary[2]], n, thickness: th, stiffness: k })
+    }
+
+    /// Continuous collision detection from `x0` to `x1` (cloth), obstacles from `obs_x0` to
+    /// `obs_x1`. Returns impacts with their nodes, in a deterministic order.
+    pub fn detect_impacts(&mut self, mesh: &Mesh, x0: &[Vec3], x1: &[Vec3]) -> Vec<([usize; 4], Impact)> {
+        let n = mesh.nodes.len();
+        let pad = CCD_TOLERANCE;
+        let face_boxes: Vec<Aabb> = (0..mesh.faces.len())
+            .map(|f| {
+                let ids = mesh.face_nodes(f);
+                Aabb::from_points(ids.iter().map(|&i| &x0[i])).merge(&Aabb::from_points(ids.iter().map(|&i| &x1[i]))).inflate(pad)
+            })
+            .collect();
+        let obs_boxes = self.obstacle_boxes(pad, true);
+        let keys = self.candidates(mesh, &face_boxes, &obs_boxes);
+        let (p0, p1) = (
+            |i: usize| if i < n { x0[i] } else { self.obs_x0[i - n] },
+            |i: usize| if i < n { x1[i] } else { self.obs_x1[i - n] },
+        );
+        keys.par_iter()
+            .filter_map(|&(kind, nodes)| {
+                let (a, b) = (nodes.map(p0), nodes.map(p1));
+                let hit = if kind == 0 { vertex_face_ccd(&a, &b, CCD_TOLERANCE) } else { edge_edge_ccd(&a, &b, CCD_TOLERANCE) };
+                hit.map(|imp| (nodes, imp))
+            })
+            .collect()
+    }
+
+    /// Makes the end-of-step cloth positions `x` collision-free relative to `x0` by iterated CCD
+    /// and impact-zone projection. `inv_mass` is 0 for pinned nodes.
+    pub fn resolve(&mut self, mesh: &Mesh, x0: &[Vec3], x: &mut [Vec3], inv_mass: &[Real], counters: &mut CollisionCounters) {
+        let n = mesh.nodes.len();
+        let delta = ZONE_SEPARATION * self.params.thickness;
+        let target: Vec<Vec3> = x.to_vec();
+        let mut constraints: Vec<ZoneConstraint> = Vec::new();
+        for _ in 0..self.params.max_iterations {
+            let impacts = self.detect_impacts(mesh, x0, x);
+            counters.ccd_iterations += 1;
+            if impacts.is_empty() {
+                return;
+            }
+            counters.impacts += impacts.len();
+            // Constraints accumulate over iterations (Harmon et al. 2008, §4): a zone keeps
+            // every impact it has met.
+            constraints.extend(impacts.into_iter().map(|(nodes, imp)| ZoneConstraint { nodes, w: imp.w, n: imp.n, delta }));
+            // Zones: connected components of cloth nodes tied by constraints.
+            let mut uf = UnionFind::new(n);
+            for c in &constraints {
+                let cloth: Vec<usize> = c.nodes.iter().copied().filter(|&i| i < n && inv_mass[i] > 0.0).collect();
+                for w in cloth.windows(2) {
+                    uf.union(w[0], w[1]);
+                }
+            }
+            let mut zones: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
+            for (k, c) in constraints.iter().enumerate() {
+                if let Some(&i) = c.nodes.iter().find(|&&i| i < n && inv_mass[i] > 0.0) {
+                    zones.entry(uf.find(i)).or_default().push(k);
+                }
+            }
+            counters.impact_zones += zones.len();
+            // Each zone restarts from the solver's positions and satisfies all its constraints.
+            for members in zones.values() {
+                let cons: Vec<ZoneConstraint> = members.iter().map(|&k| constraints[k]).collect();
+                let mut zone_nodes: Vec<usize> = cons.iter().flat_map(|c| c.nodes).filter(|&i| i < n).collect();
+                zone_nodes.sort_unstable();
+                zone_nodes.dedup();
+                for &i in &zone_nodes {
+                    x[i] = target[i];
+                }
+                let mut state = ZoneState { x, inv_mass, fixed: &self.obs_x1 };
+                if resolve_zone(&mut state, &cons, 1e-12).is_err() {
+                    counters.failed_zones += 1;
+                }
+            }
+        }
+        if !self.detect_impacts(mesh, x0, x).is_empty() {
+            counters.cap_hits += 1;
+        }
+    }
+}
+
+/// Candidate primitive pairs between two cloth faces: vertex–face where the vertex is not on the
+/// face, edge–edge where the edges share no node.
+fn push_self_keys(keys: &mut Vec<(u8, [usize; 4])>, f: &[usize; 3], g: &[usize; 3]) {
+    for (a, b) in [(f, g), (g, f)] {
+        for &p in a {
+            if !b.contains(&p) {
+                keys.push((0, [p, b[0], b[1], b[2]]));
+            }
+        }
+    }
+    for k in 0..3 {
+        for l in 0..3 {
+            let (a0, a1) = (f[k], f[(k + 1) % 3]);
+            let (b0, b1) = (g[l], g[(l + 1) % 3]);
+            if a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1 {
+                continue;
+            }
+            let (ea, eb) = ([a0.min(a1), a0.max(a1)], [b0.min(b1), b0.max(b1)]);
+            let (e1, e2) = if ea <= eb { (ea, eb) } else { (eb, ea) };
+            keys.push((1, [e1[0], e1[1], e2[0], e2[1]]));
+        }
+    }
+}
+
+struct UnionFind {
+    parent: Vec<usize>,
+}
+
+impl UnionFind {
+    fn new(n: usize) -> Self {
+        UnionFind { parent: (0..n).collect() }
+    }
+    fn find(&mut self, mut i: usize) -> usize {
+        while self.parent[i] != i {
+            self.parent[i] = self.parent[self.parent[i]];
+            i = self.parent[i];
+        }
+        i
+    }
+    fn union(&mut self, a: usize, b: usize) {
+        let (ra, rb) = (self.find(a), self.find(b));
+        if ra != rb {
+            let (lo, hi) = (ra.min(rb), ra.max(rb));
+            self.parent[hi] = lo;
+        }
+    }
+}
