@@ -6,7 +6,7 @@
 
 use rayon::prelude::*;
 
-use super::bvh::{Aabb, Bvh};
+use super::broad::{BroadPhase, Interval, VF};
 use super::ccd::{edge_edge_ccd, vertex_face_ccd, Impact, CCD_TOLERANCE};
 use super::geometry::closest_point_triangle;
 use super::impact_zones::{resolve_zone, ZoneConstraint, ZoneState};
@@ -42,8 +42,8 @@ pub struct CollisionWorld {
     /// Obstacle vertex positions at the start and end of the current step.
     pub obs_x0: Vec<Vec3>,
     pub obs_x1: Vec<Vec3>,
-    obs_bvh: Option<Bvh>,
-    cloth_bvh: Option<(usize, Bvh)>,
+    obs_edges: Vec<[usize; 2]>,
+    broad: BroadPhase,
 }
 
 impl CollisionWorld {
@@ -55,6 +55,10 @@ impl CollisionWorld {
             obs_tris.extend(b.triangles().iter().map(|t| t.map(|i| i + offset)));
             body_start.push(offset + b.vertex_count());
         }
+        let mut obs_edges: Vec<[usize; 2]> =
+            obs_tris.iter().flat_map(|t| (0..3).map(move |k| [t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])])).collect();
+        obs_edges.sort_unstable();
+        obs_edges.dedup();
         let mut w = CollisionWorld {
             params,
             bodies,
@@ -62,8 +66,8 @@ impl CollisionWorld {
             body_start,
             obs_x0: Vec::new(),
             obs_x1: Vec::new(),
-            obs_bvh: None,
-            cloth_bvh: None,
+            obs_edges,
+            broad: BroadPhase::default(),
         };
         w.obs_x1 = w.positions_at(t);
         w.obs_x0 = w.obs_x1.clone();
@@ -85,89 +89,14 @@ impl CollisionWorld {
         self.obs_x0.iter().zip(&self.obs_x1).map(|(a, b)| (b - a) / h).collect()
     }
 
-    fn obstacle_boxes(&self, pad: Real, swept: bool) -> Vec<Aabb> {
-        self.obs_tris
-            .iter()
-            .map(|t| {
-                let mut b = Aabb::from_points(t.iter().map(|&i| &self.obs_x1[i]));
-                if swept {
-                    b = b.merge(&Aabb::from_points(t.iter().map(|&i| &self.obs_x0[i])));
-                }
-                b.inflate(pad)
-            })
-            .collect()
-    }
-
-    /// The obstacle tree refit to `boxes` (taken out; the caller puts it back).
-    fn obstacle_tree(&mut self, boxes: &[Aabb]) -> Bvh {
-        match self.obs_bvh.take() {
-            Some(mut t) if t.len() == boxes.len() => {
-                t.refit(boxes);
-                t
-            }
-            _ => Bvh::build(boxes),
-        }
-    }
-
-    fn cloth_tree(&mut self, boxes: &[Aabb], faces: usize) -> Bvh {
-        match self.cloth_bvh.take() {
-            Some((n, mut t)) if n == faces => {
-                t.refit(boxes);
-                t
-            }
-            _ => Bvh::build(boxes),
-        }
-    }
-
-    /// Candidate primitive pairs (kind 0 vertex–face, 1 edge–edge) from the face pairs whose
-    /// boxes overlap: cloth against obstacles and, with self-collision on, cloth against cloth.
-    /// Sorted and unique.
-    fn candidates(&mut self, mesh: &Mesh, face_boxes: &[Aabb], obs_boxes: &[Aabb]) -> Vec<(u8, [usize; 4])> {
-        let n = mesh.nodes.len();
-        let cloth_tree = self.cloth_tree(face_boxes, mesh.faces.len());
-        let mut keys: Vec<(u8, [usize; 4])> = Vec::new();
-        if !self.obs_tris.is_empty() {
-            let obs_tree = self.obstacle_tree(obs_boxes);
-            for (cf, of) in cloth_tree.pairs(face_boxes, &obs_tree, obs_boxes) {
-                let c = mesh.face_nodes(cf);
-                let o = self.obs_tris[of].map(|i| i + n);
-                for &p in &c {
-                    keys.push((0, [p, o[0], o[1], o[2]]));
-                }
-                for &p in &o {
-                    keys.push((0, [p, c[0], c[1], c[2]]));
-                }
-                for k in 0..3 {
-                    for l in 0..3 {
-                        let (a, b) = ((c[k], c[(k + 1) % 3]), (o[l], o[(l + 1) % 3]));
-                        keys.push((1, [a.0.min(a.1), a.0.max(a.1), b.0.min(b.1), b.0.max(b.1)]));
-                    }
-                }
-            }
-            self.obs_bvh = Some(obs_tree);
-        }
-        if self.params.self_collision {
-            for (f, g) in cloth_tree.self_pairs(face_boxes) {
-                push_self_keys(&mut keys, &mesh.face_nodes(f), &mesh.face_nodes(g));
-            }
-        }
-        self.cloth_bvh = Some((mesh.faces.len(), cloth_tree));
-        keys.sort_unstable();
-        keys.dedup();
-        keys
-    }
-
     /// Repulsion contacts at the start of a step: cloth against obstacles (at the end of the
     /// step, so an obstacle moving in is felt) and, with self-collision on, cloth against cloth.
     pub fn proximity(&mut self, mesh: &Mesh, contact_area: &[Real]) -> Vec<Contact> {
         let th = self.params.thickness;
         let n = mesh.nodes.len();
         let x: Vec<Vec3> = mesh.positions();
-        let face_boxes: Vec<Aabb> = (0..mesh.faces.len())
-            .map(|f| Aabb::from_points(mesh.face_nodes(f).iter().map(|&i| &x[i])).inflate(th))
-            .collect();
-        let obs_boxes = self.obstacle_boxes(0.0, false);
-        let keys = self.candidates(mesh, &face_boxes, &obs_boxes);
+        let iv = Interval { cloth0: &x, cloth1: &x, obs0: &self.obs_x1, obs1: &self.obs_x1 };
+        let keys = self.broad.candidates(mesh, &self.obs_tris, &self.obs_edges, &iv, th, self.params.self_collision);
         let pos = |i: usize| if i < n { x[i] } else { self.obs_x1[i - n] };
         let k_area = self.params.stiffness;
         let mut contacts: Vec<Contact> = keys
@@ -177,8 +106,8 @@ impl CollisionWorld {
                 let area = nodes.iter().filter(|&&i| i < n).map(|&i| contact_area[i]).fold(0.0, Real::max);
                 let k = k_area * area;
                 match kind {
-                    0 if nodes[0] < n && nodes[1] >= n => self.obstacle_face_contact(nodes, &xs, k),
-                    0 => node_face_contact(nodes, &xs, th, k),
+                    VF if nodes[0] < n && nodes[1] >= n => self.obstacle_face_contact(nodes, &xs, k),
+                    VF => node_face_contact(nodes, &xs, th, k),
                     _ => edge_edge_contact(nodes, &xs, th, k),
                 }
             })
@@ -221,15 +150,8 @@ impl CollisionWorld {
     /// `obs_x1`. Returns impacts with their nodes, in a deterministic order.
     pub fn detect_impacts(&mut self, mesh: &Mesh, x0: &[Vec3], x1: &[Vec3]) -> Vec<([usize; 4], Impact)> {
         let n = mesh.nodes.len();
-        let pad = CCD_TOLERANCE;
-        let face_boxes: Vec<Aabb> = (0..mesh.faces.len())
-            .map(|f| {
-                let ids = mesh.face_nodes(f);
-                Aabb::from_points(ids.iter().map(|&i| &x0[i])).merge(&Aabb::from_points(ids.iter().map(|&i| &x1[i]))).inflate(pad)
-            })
-            .collect();
-        let obs_boxes = self.obstacle_boxes(pad, true);
-        let keys = self.candidates(mesh, &face_boxes, &obs_boxes);
+        let iv = Interval { cloth0: x0, cloth1: x1, obs0: &self.obs_x0, obs1: &self.obs_x1 };
+        let keys = self.broad.candidates(mesh, &self.obs_tris, &self.obs_edges, &iv, CCD_TOLERANCE, self.params.self_collision);
         let (p0, p1) = (
             |i: usize| if i < n { x0[i] } else { self.obs_x0[i - n] },
             |i: usize| if i < n { x1[i] } else { self.obs_x1[i - n] },
@@ -237,7 +159,7 @@ impl CollisionWorld {
         keys.par_iter()
             .filter_map(|&(kind, nodes)| {
                 let (a, b) = (nodes.map(p0), nodes.map(p1));
-                let hit = if kind == 0 { vertex_face_ccd(&a, &b, CCD_TOLERANCE) } else { edge_edge_ccd(&a, &b, CCD_TOLERANCE) };
+                let hit = if kind == VF { vertex_face_ccd(&a, &b, CCD_TOLERANCE) } else { edge_edge_ccd(&a, &b, CCD_TOLERANCE) };
                 hit.map(|imp| (nodes, imp))
             })
             .collect()
@@ -292,30 +214,6 @@ impl CollisionWorld {
         }
         if !self.detect_impacts(mesh, x0, x).is_empty() {
             counters.cap_hits += 1;
-        }
-    }
-}
-
-/// Candidate primitive pairs between two cloth faces: vertex–face where the vertex is not on the
-/// face, edge–edge where the edges share no node.
-fn push_self_keys(keys: &mut Vec<(u8, [usize; 4])>, f: &[usize; 3], g: &[usize; 3]) {
-    for (a, b) in [(f, g), (g, f)] {
-        for &p in a {
-            if !b.contains(&p) {
-                keys.push((0, [p, b[0], b[1], b[2]]));
-            }
-        }
-    }
-    for k in 0..3 {
-        for l in 0..3 {
-            let (a0, a1) = (f[k], f[(k + 1) % 3]);
-            let (b0, b1) = (g[l], g[(l + 1) % 3]);
-            if a0 == b0 || a0 == b1 || a1 == b0 || a1 == b1 {
-                continue;
-            }
-            let (ea, eb) = ([a0.min(a1), a0.max(a1)], [b0.min(b1), b0.max(b1)]);
-            let (e1, e2) = if ea <= eb { (ea, eb) } else { (eb, ea) };
-            keys.push((1, [e1[0], e1[1], e2[0], e2[1]]));
         }
     }
 }
