@@ -9,11 +9,7 @@ use viewcloth::scene::{self, InputError, Scene};
 use viewcloth::sim::{run, RunOptions};
 
 #[derive(Parser)]
-#[command(
-    name = "viewcloth",
-    version,
-    about = "Film cloth simulator: scene files in, one OBJ mesh per frame out"
-)]
+#[command(name = "viewcloth", version, about = "Film cloth simulator: scene files in, one OBJ mesh per frame out")]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -37,6 +33,9 @@ enum Command {
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
+        /// Also write each obstacle's world-space mesh per frame beside the cloth frames.
+        #[arg(long)]
+        export_obstacles: bool,
     },
     /// Validate scene files and the meshes they reference, without simulating.
     Check {
@@ -53,19 +52,13 @@ const EXIT_RUN: u8 = 1;
 fn load(scene: &Option<PathBuf>) -> Result<(Scene, String), InputError> {
     match scene {
         Some(path) => {
-            let stem = path
-                .file_stem()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_else(|| "scene".into());
+            let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
             Ok((scene::load_file(path)?, stem))
         }
         None => {
             let name = scene::DEFAULT_SCENE_NAME;
             let file = PathBuf::from(format!("<built-in {name}>"));
-            Ok((
-                scene::load_str(scene::DEFAULT_SCENE, &file, Path::new("."), name)?,
-                name.to_string(),
-            ))
+            Ok((scene::load_str(scene::DEFAULT_SCENE, &file, Path::new("."), name)?, name.to_string()))
         }
     }
 }
@@ -76,12 +69,10 @@ fn simulate(
     out: Option<PathBuf>,
     threads: Option<u64>,
     quiet: bool,
+    export_obstacles: bool,
 ) -> ExitCode {
     if let Some(n) = threads {
-        if let Err(e) = rayon::ThreadPoolBuilder::new()
-            .num_threads(n as usize)
-            .build_global()
-        {
+        if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(n as usize).build_global() {
             eprintln!("error: --threads: cannot start {n} threads: {e}");
             return ExitCode::from(EXIT_INPUT);
         }
@@ -94,11 +85,7 @@ fn simulate(
         }
     };
     let out_dir = out.unwrap_or_else(|| Path::new("out").join(&stem));
-    let opts = RunOptions {
-        out_dir: out_dir.clone(),
-        frames: frames.map(|f| f as usize),
-        quiet,
-    };
+    let opts = RunOptions { out_dir: out_dir.clone(), frames: frames.map(|f| f as usize), quiet, export_obstacles };
     match run(scene, &opts) {
         Ok(stats) => {
             if !quiet {
@@ -140,13 +127,9 @@ fn check(files: &[PathBuf]) -> ExitCode {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        Command::Simulate {
-            scene,
-            frames,
-            out,
-            threads,
-            quiet,
-        } => simulate(scene, frames, out, threads, quiet),
+        Command::Simulate { scene, frames, out, threads, quiet, export_obstacles } => {
+            simulate(scene, frames, out, threads, quiet, export_obstacles)
+        }
         Command::Check { files } => check(&files),
     }
 }

@@ -204,6 +204,19 @@ pub fn frame_obj(mesh: &Mesh, cloth_names: &[String]) -> String {
     s
 }
 
+/// The OBJ text of an obstacle's world-space triangle mesh.
+pub fn obstacle_obj(x: &[Vec3], triangles: &[[usize; 3]]) -> String {
+    let mut s = String::with_capacity(x.len() * 40 + triangles.len() * 24);
+    s.push_str("# viewcloth obstacle\n");
+    for p in x {
+        let _ = writeln!(s, "v {:.9} {:.9} {:.9}", p.x, p.y, p.z);
+    }
+    for t in triangles {
+        let _ = writeln!(s, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1);
+    }
+    s
+}
+
 /// Reads and parses an OBJ file; the error string names the file and line.
 pub fn read_obj(path: &Path) -> Result<ObjData, String> {
     let text = std::fs::read_to_string(path)

@@ -4,7 +4,7 @@ use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use crate::io::obj::frame_obj;
+use crate::io::obj::{frame_obj, obstacle_obj};
 use crate::io::stats::{CollisionFrameStats, RunStats};
 use crate::io::write_atomic;
 use crate::scene::Scene;
@@ -16,6 +16,8 @@ pub struct RunOptions {
     /// Overrides the scene's frame count.
     pub frames: Option<usize>,
     pub quiet: bool,
+    /// Also write each obstacle's world-space mesh per frame (`obstacle_<name>_NNNN.obj`).
+    pub export_obstacles: bool,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -57,6 +59,15 @@ pub fn run(scene: Scene, opts: &RunOptions) -> Result<RunStats, RunError> {
         let path = frame_path(f);
         let clock = Instant::now();
         write_atomic(&path, frame_obj(&sim.mesh, &names).as_bytes()).map_err(io_err(&path))?;
+        if opts.export_obstacles {
+            if let Some(world) = &sim.collisions {
+                for (body, obstacle) in world.bodies.iter().zip(&sim.scene.obstacles) {
+                    let path = opts.out_dir.join(format!("obstacle_{}_{f:0digits$}.obj", file_safe(&obstacle.name)));
+                    let text = obstacle_obj(&body.positions_at(sim.time), body.triangles());
+                    write_atomic(&path, text.as_bytes()).map_err(io_err(&path))?;
+                }
+            }
+        }
         sim.timers.add("output", clock.elapsed().as_secs_f64());
         Ok(())
     };
@@ -112,4 +123,9 @@ pub fn run(scene: Scene, opts: &RunOptions) -> Result<RunStats, RunError> {
         bar.finish();
     }
     Ok(stats)
+}
+
+/// A name reduced to characters safe in a file name.
+fn file_safe(name: &str) -> String {
+    name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect()
 }
