@@ -4,3 +4,5 @@
 pub mod bvh;
 pub mod impact_zones;
 pub mod friction;
+pub mod obstacle;
+pub mod sdf;

@@ -78,6 +78,19 @@ pub enum ObstacleShape {
     Plane { size: [Real; 2] },
     Box { size: [Real; 3] },
     Capsule { radius: Real, length: Real },
+    /// A deforming mesh given as one OBJ per frame.
+    Sequence(MeshSequence),
+}
+
+/// A per-frame OBJ sequence of one topology: `frames[k]` holds the local vertex positions at
+/// time `start_time + k / fps` (`frames[0]` equals `mesh.positions`).
+#[derive(Clone, Debug)]
+pub struct MeshSequence {
+    /// The first file: faces (shared by every frame) and the positions of frame 0.
+    pub mesh: ObjData,
+    pub frames: Vec<Vec<Vec3>>,
+    pub start_time: Real,
+    pub fps: Real,
 }
 
 #[derive(Clone, Debug)]

@@ -237,6 +237,9 @@ pub struct ObstacleSpec {
     pub cuboid: Option<BoxSpec>,
     #[serde(default)]
     pub capsule: Option<CapsuleSpec>,
+    /// A deforming obstacle: one OBJ per frame, all of one topology.
+    #[serde(default)]
+    pub sequence: Option<SequenceSpec>,
     #[serde(default)]
     pub transform: TransformSpec,
     #[serde(default)]
@@ -268,4 +271,21 @@ pub struct CapsuleSpec {
     pub radius: f64,
     /// Distance between the two hemisphere centres, along local z.
     pub length: f64,
+}
+
+/// A per-frame OBJ sequence: files `pattern` formatted with `first`, `first + 1`, …,
+/// `first + count − 1` (printf style, `%d` or zero-padded `%04d`), relative to the scene file.
+/// File k is the obstacle's local shape at time `start_time + k / fps`; positions are linearly
+/// interpolated between files and held before the first and after the last. Every file must have
+/// the vertex count and faces of the first.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct SequenceSpec {
+    pub pattern: String,
+    #[serde(default)]
+    pub first: i64,
+    pub count: i64,
+    pub fps: f64,
+    #[serde(default)]
+    pub start_time: f64,
 }
