@@ -11,4 +11,5 @@ pub mod math;
 pub mod mesh;
 pub mod scene;
 pub mod sim;
+pub mod sizing;
 pub mod solver;

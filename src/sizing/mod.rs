@@ -1,0 +1,232 @@
+//! The sizing field (Narain, Samii & O'Brien 2012, §3): per face, a 2×2 metric M in material
+//! space; an edge with material vector u is too long when √(uᵀ M̄ u) > 1, M̄ the mean of its
+//! end vertices' metrics. Criteria: curvature, compression (buckling), velocity gradient and
+//! obstacle proximity, combined by tensor max (or sum) and clamped to the size limits and the
+//! minimum aspect ratio (eqs. 2–6 and §3.4; formulas as in DESIGN.md "Sizing field").
+
+pub mod tensor_max;
+
+use crate::math::{eigen_sym2, Mat2, Mat3x2, Real, Vec2, Vec3};
+pub use tensor_max::tensor_max;
+
+/// How criteria are combined.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Combine {
+    /// Smallest metric dominating every criterion (ARCSim).
+    Max,
+    /// Plain sum of the criteria.
+    Sum,
+}
+
+/// Refinement criteria; a `None` criterion is off.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SizingParams {
+    /// Δθ (radians): angle a face may bend through.
+    pub refine_angle: Option<Real>,
+    /// c: compression (strain) a face may buckle through.
+    pub refine_compression: Option<Real>,
+    /// Δv (m/s): velocity difference allowed across a face.
+    pub refine_velocity: Option<Real>,
+    /// Refine near obstacles.
+    pub refine_obstacle: bool,
+    /// Edge length limits (m).
+    pub size_min: Real,
+    pub size_max: Real,
+    /// Smallest allowed aspect ratio (0, 1].
+    pub aspect_min: Real,
+    pub combine: Combine,
+}
+
+/// A nearby obstacle feature, linearised as a plane: a point on it and its outward normal.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ObstaclePlane {
+    pub point: Vec3,
+    pub normal: Vec3,
+}
+
+/// What one face's sizing depends on.
+pub struct FaceState {
+    /// Material-space corners.
+    pub u: [Vec2; 3],
+    pub x: [Vec3; 3],
+    pub v: [Vec3; 3],
+    /// Unit node normals at the corners.
+    pub n: [Vec3; 3],
+    /// Dihedral angle θ of the edge opposite each corner (0 on a boundary).
+    pub theta: [Real; 3],
+    /// Nearest obstacle plane of each corner, if within range.
+    pub planes: [Option<ObstaclePlane>; 3],
+}
+
+/// Gradient in material space of a field given at the corners: [f₁ − f₀, f₂ − f₀] D_m⁻¹.
+fn material_gradient(dm_inv: &Mat2, f: [Vec3; 3]) -> Mat3x2 {
+    Mat3x2::from_columns(&[f[1] - f[0], f[2] - f[0]]) * dm_inv
+}
+
+/// Positive part of a symmetric 2×2 matrix, and its square root.
+fn pos_sqrt(m: &Mat2) -> Mat2 {
+    let (l, q) = eigen_sym2(m);
+    q * Mat2::from_diagonal(&Vec2::new(l[0].max(0.0).sqrt(), l[1].max(0.0).sqrt())) * q.transpose()
+}
+
+fn pos(m: &Mat2) -> Mat2 {
+    crate::math::pos_part2(m)
+}
+
+/// adj(A) for the compression metric's buckling term: [[a₁₁, −a₁₀], [−a₀₁, a₀₀]].
+fn adjugate(a: &Mat2) -> Mat2 {
+    Mat2::new(a[(1, 1)], -a[(1, 0)], -a[(0, 1)], a[(0, 0)])
+}
+
+/// The criteria metrics of one face (before combination and clamping).
+pub fn face_criteria(s: &FaceState, p: &SizingParams) -> Vec<Mat2> {
+    let dm = Mat2::from_columns(&[s.u[1] - s.u[0], s.u[2] - s.u[0]]);
+    let area = 0.5 * dm.determinant();
+    let Some(dm_inv) = dm.try_inverse() else { return Vec::new() };
+    if area <= 0.0 {
+        return Vec::new();
+    }
+    let grad_n = material_gradient(&dm_inv, s.n);
+    let s2 = grad_n.transpose() * grad_n;
+    let mut out = Vec::with_capacity(4);
+    if let Some(dtheta) = p.refine_angle {
+        // Shape operator from dihedral angles: S = (1/A) Σₑ ½ θₑ |eₑ| t̂ₑ t̂ₑᵀ, t̂ₑ the unit
+        // material-space normal of edge e (opposite corner k).
+        let mut shape = Mat2::zeros();
+        for k in 0..3 {
+            let e = s.u[(k + 2) % 3] - s.u[(k + 1) % 3];
+            let len = e.norm();
+            if len == 0.0 {
+                continue;
+            }
+            let t = Vec2::new(e.y, -e.x) / len;
+            shape += (0.5 * s.theta[k] * len / area) * t * t.transpose();
+        }
+        let m1 = shape.transpose() * shape / (dtheta * dtheta);
+        let m2 = s2 / (dtheta * dtheta);
+        out.push(tensor_max(&[m1, m2]));
+    }
+    if let Some(c) = p.refine_compression {
+        let f = material_gradient(&dm_inv, s.x);
+        let e = f.transpose() * f - Mat2::identity();
+        let d = e.transpose() * e - 4.0 * c * c * adjugate(&s2);
+        out.push(pos(&(-e + pos_sqrt(&d))) / (2.0 * c * c));
+    }
+    if let Some(dv) = p.refine_velocity {
+        let gv = material_gradient(&dm_inv, s.v);
+        out.push(gv.transpose() * gv / (dv * dv));
+    }
+    if p.refine_obstacle {
+        let mut m = Mat2::zeros();
+        for plane in s.planes.iter().flatten() {
+            let h = s.x.map(|x| plane.normal.dot(&(x - plane.point)));
+            let grad_h = dm_inv.transpose() * Vec2::new(h[1] - h[0], h[2] - h[0]);
+            let hc = (h.iter().sum::<Real>() / 3.0).abs().max(1e-9);
+            m += grad_h * grad_h.transpose() / (hc * hc);
+        }
+        out.push(m / 3.0);
+    }
+    out
+}
+
+/// Combines and clamps: eigenvalues into [1/size_max², 1/size_min²], then λ_min ≥ aspect_min²·λ_max.
+pub fn clamp_metric(m: &Mat2, p: &SizingParams) -> Mat2 {
+    let (l, q) = eigen_sym2(m);
+    let (lo, hi) = (1.0 / (p.size_max * p.size_max), 1.0 / (p.size_min * p.size_min));
+    let mut l = Vec2::new(l[0].clamp(lo, hi), l[1].clamp(lo, hi));
+    let floor = p.aspect_min * p.aspect_min * l[1].max(l[0]);
+    l = Vec2::new(l[0].max(floor), l[1].max(floor));
+    q * Mat2::from_diagonal(&l) * q.transpose()
+}
+
+/// The clamped sizing metric of one face.
+pub fn face_sizing(s: &FaceState, p: &SizingParams) -> Mat2 {
+    let criteria = face_criteria(s, p);
+    let m = match p.combine {
+        Combine::Max => tensor_max(&criteria),
+        Combine::Sum => criteria.iter().fold(Mat2::zeros(), |a, b| a + b),
+    };
+    clamp_metric(&m, p)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params() -> SizingParams {
+        SizingParams {
+            refine_angle: Some(0.3),
+            refine_compression: Some(0.005),
+            refine_velocity: Some(0.5),
+            refine_obstacle: true,
+            size_min: 0.01,
+            size_max: 0.2,
+            aspect_min: 0.2,
+            combine: Combine::Max,
+        }
+    }
+
+    fn flat_face() -> FaceState {
+        let u = [Vec2::new(0.0, 0.0), Vec2::new(0.1, 0.0), Vec2::new(0.0, 0.1)];
+        FaceState {
+            u,
+            x: u.map(|p| Vec3::new(p.x, p.y, 0.0)),
+            v: [Vec3::zeros(); 3],
+            n: [Vec3::z(); 3],
+            theta: [0.0; 3],
+            planes: [None; 3],
+        }
+    }
+
+    #[test]
+    fn flat_resting_face_gets_the_coarsest_size() {
+        let p = params();
+        let m = face_sizing(&flat_face(), &p);
+        assert!((m - Mat2::identity() / (0.2 * 0.2)).norm() < 1e-9);
+    }
+
+    #[test]
+    fn bending_refines_across_the_fold_only() {
+        let p = params();
+        let mut f = flat_face();
+        // Hypotenuse (opposite corner 0) bent by 0.6 rad: refine along its normal (1,1)/√2.
+        f.theta = [0.6, 0.0, 0.0];
+        let m = face_sizing(&f, &p);
+        let across = Vec2::new(1.0, 1.0).normalize();
+        let along = Vec2::new(1.0, -1.0).normalize();
+        assert!(across.dot(&(m * across)) > 4.0 * along.dot(&(m * along)));
+    }
+
+    #[test]
+    fn compression_and_velocity_refine() {
+        let p = params();
+        let mut f = flat_face();
+        f.x = f.u.map(|u| Vec3::new(0.9 * u.x, u.y, 0.0));
+        let m = face_sizing(&f, &p);
+        assert!(m[(0, 0)] > 1.0 / (0.2 * 0.2) * 2.0, "{m}");
+        let mut f = flat_face();
+        f.v = [Vec3::zeros(), Vec3::new(0.0, 0.0, 1.0), Vec3::zeros()];
+        let m = face_sizing(&f, &p);
+        assert!(m[(0, 0)] > m[(1, 1)] * 2.0, "{m}");
+    }
+
+    #[test]
+    fn clamps_to_limits_and_aspect() {
+        let p = params();
+        let m = clamp_metric(&Mat2::new(1e9, 0.0, 0.0, 0.0), &p);
+        assert!((m[(0, 0)] - 1e4).abs() < 1e-6);
+        assert!((m[(1, 1)] - 0.04 * 1e4).abs() < 1e-6);
+    }
+
+    #[test]
+    fn near_obstacle_refines_along_the_approach() {
+        let p = params();
+        let mut f = flat_face();
+        // A plane tilted about y, 2 mm under the face's middle: h varies along u.
+        let n = Vec3::new(-0.3, 0.0, 1.0).normalize();
+        let plane = ObstaclePlane { point: Vec3::new(0.03, 0.03, -0.002), normal: n };
+        f.planes = [Some(plane); 3];
+        let m = face_sizing(&f, &p);
+        assert!(m[(0, 0)] > m[(1, 1)], "{m}");
+    }
+}
