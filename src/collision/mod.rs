@@ -4,5 +4,10 @@
 pub mod bvh;
 pub mod impact_zones;
 pub mod friction;
+pub mod ccd;
+pub mod geometry;
+pub mod proximity;
 pub mod obstacle;
 pub mod sdf;
+pub mod world;
+pub mod broad;
