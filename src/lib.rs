@@ -9,6 +9,7 @@ pub mod forces;
 pub mod io;
 pub mod math;
 pub mod mesh;
+pub mod remesh;
 pub mod scene;
 pub mod sim;
 pub mod sizing;

@@ -6,7 +6,11 @@
 
 pub mod tensor_max;
 
+use rayon::prelude::*;
+
+use crate::forces::edge_angles;
 use crate::math::{eigen_sym2, Mat2, Mat3x2, Real, Vec2, Vec3};
+use crate::mesh::Mesh;
 pub use tensor_max::tensor_max;
 
 /// How criteria are combined.
@@ -147,6 +151,43 @@ pub fn face_sizing(s: &FaceState, p: &SizingParams) -> Mat2 {
         Combine::Sum => criteria.iter().fold(Mat2::zeros(), |a, b| a + b),
     };
     clamp_metric(&m, p)
+}
+
+/// Sizing of every face of `mesh` (clamped), with `planes[node]` the nearest obstacle plane of
+/// each node within range.
+pub fn face_metrics(mesh: &Mesh, p: &SizingParams, planes: &[Option<ObstaclePlane>]) -> Vec<Mat2> {
+    let angles = edge_angles(mesh);
+    let normals = mesh.node_normals();
+    (0..mesh.faces.len())
+        .into_par_iter()
+        .map(|f| {
+            let ids = mesh.face_nodes(f);
+            let fe = mesh.face_edges[f];
+            let state = FaceState {
+                u: mesh.face_uv(f),
+                x: ids.map(|n| mesh.nodes[n].x),
+                v: ids.map(|n| mesh.nodes[n].v),
+                n: ids.map(|n| normals[n]),
+                theta: fe.map(|e| angles[e.idx()]),
+                planes: ids.map(|n| planes.get(n).copied().flatten()),
+            };
+            face_sizing(&state, p)
+        })
+        .collect()
+}
+
+/// Vertex metrics: the material-area-weighted mean of the adjacent faces' metrics.
+pub fn vertex_metrics(mesh: &Mesh, face: &[Mat2]) -> Vec<Mat2> {
+    let mut sum = vec![Mat2::zeros(); mesh.verts.len()];
+    let mut area = vec![0.0; mesh.verts.len()];
+    for (f, m) in face.iter().enumerate() {
+        let a = mesh.material_area(f);
+        for v in mesh.faces[f].v {
+            sum[v.idx()] += a * m;
+            area[v.idx()] += a;
+        }
+    }
+    sum.iter().zip(&area).map(|(m, a)| if *a > 0.0 { m / *a } else { *m }).collect()
 }
 
 #[cfg(test)]

@@ -1,0 +1,148 @@
+//! Anisotropic adaptive remeshing (Narain, Samii & O'Brien 2012, §4): flip all edges, split
+//! every edge longer than 1 in the sizing metric (worst first, local flips after each), then
+//! collapse edges whose removal keeps every new edge under 0.9 (local flips after each), until
+//! nothing changes. Operations are checked values (`ops`); boundaries keep their shape, seams and
+//! handle nodes are preserved.
+
+pub mod ops;
+pub mod work;
+
+use crate::math::{Mat2, Real};
+use crate::mesh::{Mesh, MeshError};
+pub use work::Finished;
+use work::Work;
+
+/// Anti flip-flop threshold of the flip test (ARCSim's `edge_flip_threshold`).
+pub const FLIP_THRESHOLD: Real = 1e-2;
+/// No flip across a world-space fold sharper than this (radians).
+pub const MAX_FLIP_FOLD: Real = 40.0 * std::f64::consts::PI / 180.0;
+/// A collapse may not create an edge longer than this in the metric.
+pub const COLLAPSE_MAX_LENGTH: Real = 0.9;
+/// Caps on passes, against pathological sizing fields.
+const MAX_PASSES: usize = 64;
+
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct RemeshStats {
+    pub splits: usize,
+    pub flips: usize,
+    pub collapses: usize,
+}
+
+/// Limits the remesher needs from the sizing parameters.
+#[derive(Clone, Copy, Debug)]
+pub struct RemeshLimits {
+    pub size_min: Real,
+    pub aspect_min: Real,
+    /// Run the collapse phase (false for a one-off uniform refinement).
+    pub coarsen: bool,
+}
+
+/// Remeshes `mesh` to the per-vert sizing metrics `vsize`; nodes flagged in `pinned` (handles)
+/// survive. Returns the new mesh with the map from old to new node ids.
+pub fn remesh(mesh: &Mesh, vsize: Vec<Mat2>, pinned: Vec<bool>, limits: &RemeshLimits) -> Result<(Finished, RemeshStats), MeshError> {
+    let mut w = Work::new(mesh, vsize, pinned);
+    let mut stats = RemeshStats::default();
+    flip_all(&mut w, &mut stats);
+    split_all(&mut w, &mut stats);
+    if limits.coarsen {
+        collapse_all(&mut w, limits, &mut stats);
+    }
+    Ok((w.finish(mesh.nodes.len())?, stats))
+}
+
+fn flip_all(w: &mut Work, stats: &mut RemeshStats) {
+    for _ in 0..MAX_PASSES {
+        let mut flipped = 0;
+        for (a, b) in w.edges() {
+            if w.valive[a] && w.valive[b] && ops::should_flip(w, a, b, FLIP_THRESHOLD, MAX_FLIP_FOLD) {
+                if let Some(op) = ops::flip(w, a, b) {
+                    op.apply(w);
+                    flipped += 1;
+                }
+            }
+        }
+        stats.flips += flipped;
+        if flipped == 0 {
+            break;
+        }
+    }
+}
+
+/// Flips around the faces of `verts` until they are locally Delaunay in the metric.
+fn flip_around(w: &mut Work, verts: &[usize], stats: &mut RemeshStats) {
+    for _ in 0..MAX_PASSES {
+        let mut edges: Vec<(usize, usize)> = verts
+            .iter()
+            .flat_map(|&v| w.vfaces[v].iter().flat_map(|&f| {
+                let t = w.faces[f];
+                (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])))
+            }))
+            .collect();
+        edges.sort_unstable();
+        edges.dedup();
+        let mut flipped = 0;
+        for (a, b) in edges {
+            if ops::should_flip(w, a, b, FLIP_THRESHOLD, MAX_FLIP_FOLD) {
+                if let Some(op) = ops::flip(w, a, b) {
+                    op.apply(w);
+                    flipped += 1;
+                }
+            }
+        }
+        stats.flips += flipped;
+        if flipped == 0 {
+            break;
+        }
+    }
+}
+
+fn split_all(w: &mut Work, stats: &mut RemeshStats) {
+    for _ in 0..MAX_PASSES {
+        let mut bad: Vec<(Real, usize, usize)> =
+            w.edges().into_iter().map(|(a, b)| (w.metric_length(a, b), a, b)).filter(|e| e.0 > 1.0).collect();
+        if bad.is_empty() {
+            return;
+        }
+        // Worst first; ties by ids for determinism.
+        bad.sort_unstable_by(|x, y| y.0.total_cmp(&x.0).then((x.1, x.2).cmp(&(y.1, y.2))));
+        for (_, a, b) in bad {
+            if !(w.valive[a] && w.valive[b]) || w.metric_length(a, b) <= 1.0 {
+                continue;
+            }
+            let Some(op) = ops::split(w, a, b) else { continue };
+            let first_new = w.u.len();
+            op.apply(w);
+            stats.splits += 1;
+            let new_verts: Vec<usize> = (first_new..w.u.len()).collect();
+            flip_around(w, &new_verts, stats);
+        }
+    }
+}
+
+fn collapse_all(w: &mut Work, limits: &RemeshLimits, stats: &mut RemeshStats) {
+    let floor = 1e-4 * limits.size_min * limits.size_min;
+    for _ in 0..MAX_PASSES {
+        let mut collapsed = 0;
+        for (a, b) in w.edges() {
+            if !(w.valive[a] && w.valive[b]) || w.metric_length(a, b) >= COLLAPSE_MAX_LENGTH || w.edge_faces(a, b).is_empty() {
+                continue;
+            }
+            for (i, j) in [(a, b), (b, a)] {
+                let Some(op) = ops::collapse(w, i, j) else { continue };
+                if ops::collapse_ok(w, &op, j, limits.aspect_min, COLLAPSE_MAX_LENGTH, floor) {
+                    op.apply(w);
+                    collapsed += 1;
+                    flip_around(w, &[j], stats);
+                    break;
+                }
+            }
+        }
+        stats.collapses += collapsed;
+        if collapsed == 0 {
+            break;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

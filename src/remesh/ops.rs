@@ -1,0 +1,206 @@
+//! Remeshing operations as values (ARCSim's `RemeshOp`): what is added and what is removed.
+//! An operation is built, checked, and only then applied to the working mesh.
+
+use crate::math::{cross2, Mat2, Real, Vec2, Vec3};
+
+use super::work::Work;
+
+/// A local change: new nodes, new verts (ids continue the work's arrays, in order), faces
+/// removed and added (over old and new vert ids), verts removed.
+#[derive(Clone, Debug, Default)]
+pub struct Op {
+    pub new_nodes: Vec<(Vec3, Vec3, u16)>,
+    /// (material coordinate, node id — old or new —, sizing metric).
+    pub new_verts: Vec<(Vec2, usize, Mat2)>,
+    pub remove_faces: Vec<usize>,
+    pub add_faces: Vec<([usize; 3], u16)>,
+    pub remove_verts: Vec<usize>,
+}
+
+impl Op {
+    /// Applies the change; returns the ids of the added faces.
+    pub fn apply(&self, w: &mut Work) -> Vec<usize> {
+        for &(x, v, c) in &self.new_nodes {
+            w.add_node(x, v, c);
+        }
+        for &(u, node, m) in &self.new_verts {
+            w.add_vert(u, node, m);
+        }
+        for &f in &self.remove_faces {
+            w.remove_face(f);
+        }
+        let added = self.add_faces.iter().map(|&(t, m)| w.add_face(t, m)).collect();
+        for &v in &self.remove_verts {
+            w.remove_vert(v);
+        }
+        added
+    }
+
+    /// Material coordinate of a vert of this op (existing or new).
+    fn u(&self, w: &Work, v: usize) -> Vec2 {
+        if v < w.u.len() {
+            w.u[v]
+        } else {
+            self.new_verts[v - w.u.len()].0
+        }
+    }
+}
+
+/// Splits the faces on edge (s → t) of `face` at new vert `p`: (s, p, k) and (p, t, k).
+fn split_face(w: &Work, f: usize, a: usize, b: usize, p: usize, op: &mut Op) {
+    let (s, t) = if w.directed(f, a, b).is_some() { (a, b) } else { (b, a) };
+    let k = w.opposite(f, a, b);
+    op.remove_faces.push(f);
+    op.add_faces.push(([s, p, k], w.fmat[f]));
+    op.add_faces.push(([p, t, k], w.fmat[f]));
+}
+
+/// Split of material edge a–b at its midpoint (both sides of a seam with one new node). The
+/// new node's position and velocity interpolate the ends (linear, so the surface is unchanged).
+pub fn split(w: &Work, a: usize, b: usize) -> Option<Op> {
+    let faces = w.edge_faces(a, b);
+    if faces.is_empty() {
+        return None;
+    }
+    let (na, nb) = (w.vnode[a], w.vnode[b]);
+    let mut op = Op::default();
+    let node = w.x.len();
+    op.new_nodes.push((0.5 * (w.x[na] + w.x[nb]), 0.5 * (w.v[na] + w.v[nb]), w.cloth[na]));
+    let p = w.u.len();
+    op.new_verts.push((0.5 * (w.u[a] + w.u[b]), node, 0.5 * (w.vsize[a] + w.vsize[b])));
+    for &f in &faces {
+        split_face(w, f, a, b, p, &mut op);
+    }
+    if faces.len() == 1 {
+        if let Some((c, d)) = w.seam_partner(a, b) {
+            let q = p + 1;
+            op.new_verts.push((0.5 * (w.u[c] + w.u[d]), node, 0.5 * (w.vsize[c] + w.vsize[d])));
+            for f in w.edge_faces(c, d) {
+                split_face(w, f, c, d, q, &mut op);
+            }
+        }
+    }
+    Some(op)
+}
+
+/// Flip of the interior edge a–b: faces (a, b, c) and (b, a, d) become (c, a, d) and (d, b, c).
+pub fn flip(w: &Work, a: usize, b: usize) -> Option<Op> {
+    let faces = w.edge_faces(a, b);
+    if faces.len() != 2 {
+        return None;
+    }
+    let (f0, f1) = if w.directed(faces[0], a, b).is_some() { (faces[0], faces[1]) } else { (faces[1], faces[0]) };
+    let c = w.directed(f0, a, b)?;
+    let d = w.directed(f1, b, a)?;
+    if c == d || w.neighbours(c).contains(&d) || w.vnode[c] == w.vnode[d] {
+        return None;
+    }
+    let (t0, t1) = ([c, a, d], [d, b, c]);
+    let floor = 1e-12 * (w.area(&w.faces[f0]) + w.area(&w.faces[f1]));
+    if w.area(&t0) <= floor || w.area(&t1) <= floor {
+        return None;
+    }
+    Some(Op { remove_faces: vec![f0, f1], add_faces: vec![(t0, w.fmat[f0]), (t1, w.fmat[f1])], ..Default::default() })
+}
+
+/// Anisotropic Delaunay test (Bossen & Heckbert 1996, in ARCSim's form): flip a–b when the
+/// angles opposite it, measured in the mean metric of the four verts, sum to more than π
+/// (sin(α + β) < 0), beyond a small threshold against flip-flopping; never across a world-space
+/// fold sharper than `max_fold` radians.
+pub fn should_flip(w: &Work, a: usize, b: usize, threshold: Real, max_fold: Real) -> bool {
+    let faces = w.edge_faces(a, b);
+    if faces.len() != 2 {
+        return false;
+    }
+    let (f0, f1) = if w.directed(faces[0], a, b).is_some() { (faces[0], faces[1]) } else { (faces[1], faces[0]) };
+    let (Some(c), Some(d)) = (w.directed(f0, a, b), w.directed(f1, b, a)) else { return false };
+    let (n0, n1) = (w.world_normal(&w.faces[f0]), w.world_normal(&w.faces[f1]));
+    let cos = n0.dot(&n1) / (n0.norm() * n1.norm()).max(1e-300);
+    if cos < max_fold.cos() {
+        return false;
+    }
+    let m = 0.25 * (w.vsize[a] + w.vsize[b] + w.vsize[c] + w.vsize[d]);
+    let (ua, ub, uc, ud) = (w.u[a], w.u[b], w.u[c], w.u[d]);
+    let (ca, cb, da, db) = (ua - uc, ub - uc, ua - ud, ub - ud);
+    let (cross_c, cross_d) = (cross2(&ca, &cb), cross2(&db, &da));
+    let s = ca.dot(&(m * cb)) * cross_d + cross_c * db.dot(&(m * da));
+    s < -threshold * (cross_c + cross_d)
+}
+
+/// Collapse of vert i onto vert j along edge i–j: faces on the edge go, i's other faces take j,
+/// i (and its node) are removed. `None` when i must stay: a handle node, a seam, a boundary
+/// corner, or a collapse off the boundary, or when the link condition fails (the result would
+/// be non-manifold).
+pub fn collapse(w: &Work, i: usize, j: usize) -> Option<Op> {
+    let (ni, nj) = (w.vnode[i], w.vnode[j]);
+    if ni == nj || w.pinned[ni] || w.nverts[ni].len() != 1 {
+        return None;
+    }
+    let edge_faces = w.edge_faces(i, j);
+    if edge_faces.is_empty() {
+        return None;
+    }
+    let bn = w.boundary_neighbours(i);
+    if !bn.is_empty() {
+        // A boundary vert may only slide along a straight stretch of boundary.
+        if bn.len() != 2 || !bn.contains(&j) || edge_faces.len() != 1 {
+            return None;
+        }
+        let k = if bn[0] == j { bn[1] } else { bn[0] };
+        let (e0, e1) = (w.u[j] - w.u[i], w.u[k] - w.u[i]);
+        if cross2(&e0, &e1).abs() > 1e-9 * e0.norm() * e1.norm() || e0.dot(&e1) >= 0.0 {
+            return None;
+        }
+    }
+    // Link condition: the common neighbours of i and j are exactly the edge's opposite corners.
+    let mut opp: Vec<usize> = edge_faces.iter().map(|&f| w.opposite(f, i, j)).collect();
+    opp.sort_unstable();
+    let ni_set = w.neighbours(i);
+    let common: Vec<usize> = w.neighbours(j).into_iter().filter(|v| ni_set.contains(v)).collect();
+    if common != opp {
+        return None;
+    }
+    let mut op = Op { remove_verts: vec![i], ..Default::default() };
+    for &f in &w.vfaces[i] {
+        op.remove_faces.push(f);
+        if !edge_faces.contains(&f) {
+            op.add_faces.push((w.faces[f].map(|v| if v == i { j } else { v }), w.fmat[f]));
+        }
+    }
+    Some(op)
+}
+
+/// Triangle aspect ratio 12√3·A/P² (1 for equilateral) in material space.
+pub fn aspect(u: [Vec2; 3]) -> Real {
+    let area = 0.5 * cross2(&(u[1] - u[0]), &(u[2] - u[0]));
+    let p = (u[1] - u[0]).norm() + (u[2] - u[1]).norm() + (u[0] - u[2]).norm();
+    if p == 0.0 {
+        return 0.0;
+    }
+    12.0 * 3f64.sqrt() * area / (p * p)
+}
+
+/// Quality checks of a collapse (Narain 2012, §4.3): no new face inverted in material or world
+/// space or below the area floor, none falling below `aspect_min` (unless the face it replaces
+/// was already worse), and no new edge longer than `max_len` in the metric.
+pub fn collapse_ok(w: &Work, op: &Op, j: usize, aspect_min: Real, max_len: Real, area_floor: Real) -> bool {
+    // `collapse` adds, in order, one face for each removed face that does not hold j.
+    let replaced = op.remove_faces.iter().filter(|&&f| !w.faces[f].contains(&j));
+    for (&f, &(t, _)) in replaced.zip(&op.add_faces) {
+        let old = w.faces[f];
+        let u = t.map(|v| op.u(w, v));
+        if 0.5 * cross2(&(u[1] - u[0]), &(u[2] - u[0])) <= area_floor {
+            return false;
+        }
+        if w.world_normal(&t).dot(&w.world_normal(&old)) <= 0.0 {
+            return false;
+        }
+        if aspect(u) < aspect_min.min(aspect(old.map(|v| w.u[v]))) {
+            return false;
+        }
+        if t.iter().any(|&k| k != j && w.metric_length(j, k) > max_len) {
+            return false;
+        }
+    }
+    true
+}

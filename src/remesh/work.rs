@@ -1,0 +1,223 @@
+//! The remesher's working mesh: the `Mesh` arrays with vert→face adjacency kept up to date by
+//! every operation, and tombstones instead of removals until `finish` compacts it back.
+
+use crate::math::{cross2, Mat2, Real, Vec2, Vec3};
+use crate::mesh::{Face, Mesh, MeshError, Node, NodeId, Vert, VertId};
+
+#[derive(Clone, Debug)]
+pub struct Work {
+    pub u: Vec<Vec2>,
+    pub vnode: Vec<usize>,
+    pub vsize: Vec<Mat2>,
+    pub valive: Vec<bool>,
+    pub x: Vec<Vec3>,
+    pub v: Vec<Vec3>,
+    pub cloth: Vec<u16>,
+    pub nalive: Vec<bool>,
+    /// Nodes that must survive (handles).
+    pub pinned: Vec<bool>,
+    pub faces: Vec<[usize; 3]>,
+    pub fmat: Vec<u16>,
+    pub falive: Vec<bool>,
+    /// Alive faces around each vert.
+    pub vfaces: Vec<Vec<usize>>,
+    /// Alive verts on each node (two or more on a seam).
+    pub nverts: Vec<Vec<usize>>,
+}
+
+/// The compacted mesh and, for every old node, its new id (None if it was removed).
+pub struct Finished {
+    pub mesh: Mesh,
+    pub node_map: Vec<Option<usize>>,
+}
+
+impl Work {
+    pub fn new(mesh: &Mesh, vsize: Vec<Mat2>, pinned: Vec<bool>) -> Self {
+        let nv = mesh.verts.len();
+        let mut vfaces = vec![Vec::new(); nv];
+        let faces: Vec<[usize; 3]> = mesh.faces.iter().map(|f| f.v.map(|v| v.idx())).collect();
+        for (f, t) in faces.iter().enumerate() {
+            for &v in t {
+                vfaces[v].push(f);
+            }
+        }
+        let mut nverts = vec![Vec::new(); mesh.nodes.len()];
+        for (i, v) in mesh.verts.iter().enumerate() {
+            nverts[v.node.idx()].push(i);
+        }
+        Work {
+            u: mesh.verts.iter().map(|v| v.u).collect(),
+            vnode: mesh.verts.iter().map(|v| v.node.idx()).collect(),
+            vsize,
+            valive: vec![true; nv],
+            x: mesh.nodes.iter().map(|n| n.x).collect(),
+            v: mesh.nodes.iter().map(|n| n.v).collect(),
+            cloth: mesh.nodes.iter().map(|n| n.cloth).collect(),
+            nalive: vec![true; mesh.nodes.len()],
+            pinned,
+            fmat: mesh.faces.iter().map(|f| f.material).collect(),
+            falive: vec![true; faces.len()],
+            faces,
+            vfaces,
+            nverts,
+        }
+    }
+
+    /// Alive faces containing both verts.
+    pub fn edge_faces(&self, a: usize, b: usize) -> Vec<usize> {
+        self.vfaces[a].iter().copied().filter(|&f| self.faces[f].contains(&b)).collect()
+    }
+
+    /// The face's corners rotated so that `a → b` is its directed edge, with the third corner;
+    /// `None` if the face does not run `a → b`.
+    pub fn directed(&self, f: usize, a: usize, b: usize) -> Option<usize> {
+        let t = self.faces[f];
+        (0..3).find(|&k| t[k] == a && t[(k + 1) % 3] == b).map(|k| t[(k + 2) % 3])
+    }
+
+    /// The corner of face `f` that is neither `a` nor `b`.
+    pub fn opposite(&self, f: usize, a: usize, b: usize) -> usize {
+        let t = self.faces[f];
+        t.into_iter().find(|&v| v != a && v != b).unwrap_or(t[0])
+    }
+
+    pub fn area(&self, t: &[usize; 3]) -> Real {
+        0.5 * cross2(&(self.u[t[1]] - self.u[t[0]]), &(self.u[t[2]] - self.u[t[0]]))
+    }
+
+    /// World-space (unnormalised) normal of a face given by verts.
+    pub fn world_normal(&self, t: &[usize; 3]) -> Vec3 {
+        let [a, b, c] = t.map(|v| self.x[self.vnode[v]]);
+        (b - a).cross(&(c - a))
+    }
+
+    /// Verts sharing an alive face with `a` (sorted, unique).
+    pub fn neighbours(&self, a: usize) -> Vec<usize> {
+        let mut n: Vec<usize> = self.vfaces[a].iter().flat_map(|&f| self.faces[f]).filter(|&v| v != a).collect();
+        n.sort_unstable();
+        n.dedup();
+        n
+    }
+
+    pub fn is_boundary_edge(&self, a: usize, b: usize) -> bool {
+        self.edge_faces(a, b).len() == 1
+    }
+
+    /// Boundary neighbours of `a` (verts joined to it by a material-space boundary edge).
+    pub fn boundary_neighbours(&self, a: usize) -> Vec<usize> {
+        self.neighbours(a).into_iter().filter(|&b| self.is_boundary_edge(a, b)).collect()
+    }
+
+    /// Another material-space edge on the same two nodes (the other side of a seam), as
+    /// `(c, d)` with `c` on `a`'s node and `d` on `b`'s.
+    pub fn seam_partner(&self, a: usize, b: usize) -> Option<(usize, usize)> {
+        let (na, nb) = (self.vnode[a], self.vnode[b]);
+        for &c in &self.nverts[na] {
+            for &d in &self.nverts[nb] {
+                if (c, d) != (a, b) && !self.edge_faces(c, d).is_empty() {
+                    return Some((c, d));
+                }
+            }
+        }
+        None
+    }
+
+    /// Metric length of the material edge a–b: √(½ uᵀ(M_a + M_b)u).
+    pub fn metric_length(&self, a: usize, b: usize) -> Real {
+        let e = self.u[b] - self.u[a];
+        let m = 0.5 * (self.vsize[a] + self.vsize[b]);
+        e.dot(&(m * e)).max(0.0).sqrt()
+    }
+
+    /// Every alive material edge once, as (a, b) with a < b, in a deterministic order.
+    pub fn edges(&self) -> Vec<(usize, usize)> {
+        let mut e: Vec<(usize, usize)> = Vec::with_capacity(self.faces.len() * 3 / 2);
+        for (f, t) in self.faces.iter().enumerate() {
+            if !self.falive[f] {
+                continue;
+            }
+            for k in 0..3 {
+                let (a, b) = (t[k], t[(k + 1) % 3]);
+                e.push((a.min(b), a.max(b)));
+            }
+        }
+        e.sort_unstable();
+        e.dedup();
+        e
+    }
+
+    pub fn add_face(&mut self, t: [usize; 3], mat: u16) -> usize {
+        let f = self.faces.len();
+        self.faces.push(t);
+        self.fmat.push(mat);
+        self.falive.push(true);
+        for v in t {
+            self.vfaces[v].push(f);
+        }
+        f
+    }
+
+    pub fn remove_face(&mut self, f: usize) {
+        self.falive[f] = false;
+        for v in self.faces[f] {
+            self.vfaces[v].retain(|&g| g != f);
+        }
+    }
+
+    pub fn add_node(&mut self, x: Vec3, v: Vec3, cloth: u16) -> usize {
+        self.x.push(x);
+        self.v.push(v);
+        self.cloth.push(cloth);
+        self.nalive.push(true);
+        self.pinned.push(false);
+        self.nverts.push(Vec::new());
+        self.x.len() - 1
+    }
+
+    pub fn add_vert(&mut self, u: Vec2, node: usize, size: Mat2) -> usize {
+        self.u.push(u);
+        self.vnode.push(node);
+        self.vsize.push(size);
+        self.valive.push(true);
+        self.vfaces.push(Vec::new());
+        self.nverts[node].push(self.u.len() - 1);
+        self.u.len() - 1
+    }
+
+    pub fn remove_vert(&mut self, v: usize) {
+        self.valive[v] = false;
+        let n = self.vnode[v];
+        self.nverts[n].retain(|&w| w != v);
+        if self.nverts[n].is_empty() {
+            self.nalive[n] = false;
+        }
+    }
+
+    /// Compacts into a `Mesh` (ids in ascending old order, new elements after), with derived
+    /// topology rebuilt.
+    pub fn finish(&self, old_nodes: usize) -> Result<Finished, MeshError> {
+        let mut node_id = vec![usize::MAX; self.x.len()];
+        let mut mesh = Mesh::default();
+        for i in 0..self.x.len() {
+            if self.nalive[i] {
+                node_id[i] = mesh.nodes.len();
+                mesh.nodes.push(Node { x: self.x[i], v: self.v[i], mass: 0.0, cloth: self.cloth[i] });
+            }
+        }
+        let mut vert_id = vec![usize::MAX; self.u.len()];
+        for i in 0..self.u.len() {
+            if self.valive[i] {
+                vert_id[i] = mesh.verts.len();
+                mesh.verts.push(Vert { u: self.u[i], node: NodeId(node_id[self.vnode[i]] as u32) });
+            }
+        }
+        for (f, t) in self.faces.iter().enumerate() {
+            if self.falive[f] {
+                mesh.faces.push(Face { v: t.map(|v| VertId(vert_id[v] as u32)), material: self.fmat[f] });
+            }
+        }
+        mesh.rebuild_topology()?;
+        let node_map = (0..old_nodes).map(|i| (node_id[i] != usize::MAX).then_some(node_id[i])).collect();
+        Ok(Finished { mesh, node_map })
+    }
+}
