@@ -180,8 +180,15 @@ impl CollisionWorld {
             }
             counters.impacts += impacts.len();
             // Constraints accumulate over iterations (Harmon et al. 2008, §4): a zone keeps
-            // every impact it has met.
-            constraints.extend(impacts.into_iter().map(|(nodes, imp)| ZoneConstraint { nodes, w: imp.w, n: imp.n, delta }));
+            // every impact it has met; a repeated impact of the same primitives replaces its
+            // older linearisation.
+            for (nodes, imp) in impacts {
+                let c = ZoneConstraint { nodes, w: imp.w, n: imp.n, delta };
+                match constraints.iter_mut().find(|old| old.nodes == nodes) {
+                    Some(old) => *old = c,
+                    None => constraints.push(c),
+                }
+            }
             // Zones: connected components of cloth nodes tied by constraints.
             let mut uf = UnionFind::new(n);
             for c in &constraints {
@@ -205,6 +212,9 @@ impl CollisionWorld {
                 zone_nodes.dedup();
                 for &i in &zone_nodes {
                     x[i] = target[i];
+                }
+                if std::env::var_os("VIEWCLOTH_DEBUG_ZONES").is_some() {
+                    eprintln!("zone: {} constraints, {} nodes", cons.len(), zone_nodes.len());
                 }
                 let mut state = ZoneState { x, inv_mass, fixed: &self.obs_x1 };
                 if resolve_zone(&mut state, &cons, 1e-12).is_err() {

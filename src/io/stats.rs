@@ -21,6 +21,17 @@ pub struct FrameStats {
     /// Present when the collision stages ran.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub collision: Option<CollisionFrameStats>,
+    /// Present when a cloth remeshes adaptively.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub remesh: Option<RemeshFrameStats>,
+}
+
+/// Remeshing work done at the start of a frame.
+#[derive(Serialize, Debug, Clone, Default, PartialEq)]
+pub struct RemeshFrameStats {
+    pub splits: usize,
+    pub flips: usize,
+    pub collapses: usize,
 }
 
 /// Collision counters of one frame (summed over its steps).

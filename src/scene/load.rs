@@ -5,11 +5,12 @@ use std::path::{Path, PathBuf};
 
 use super::material::resolve;
 use super::motion::{Keyframe, Motion, Transform};
-use super::spec::{ClothSpec, CollisionSpec, HandleSpec, KeyframeSpec, ObstacleSpec, SceneSpec, TransformSpec};
-use super::{Cloth, CollisionParams, Handle, InputError, Obstacle, ObstacleShape, Scene};
+use super::spec::{ClothSpec, RemeshSpec, CollisionSpec, HandleSpec, KeyframeSpec, ObstacleSpec, SceneSpec, TransformSpec};
+use super::{Cloth, Remesh, RemeshMode, CollisionParams, FollowObstacle, Handle, InputError, Obstacle, ObstacleShape, Scene};
 use crate::forces::wind::Wind;
 use crate::io::obj::{read_obj, ObjData};
 use crate::math::{cross2, Vec2, Vec3};
+use crate::sizing::{Combine, SizingParams};
 use crate::mesh::{rectangle, Face, Mesh, MeshError, Node, NodeId, Vert, VertId};
 
 /// The built-in default shot (`viewcloth simulate` with no scene).
@@ -25,11 +26,7 @@ struct Ctx<'a> {
 
 impl Ctx<'_> {
     fn err(&self, path: impl Into<String>, msg: impl Into<String>) -> InputError {
-        InputError {
-            file: self.file.to_path_buf(),
-            location: Some(path.into()),
-            msg: msg.into(),
-        }
+        InputError { file: self.file.to_path_buf(), location: Some(path.into()), msg: msg.into() }
     }
     fn resolve(&self, rel: &str) -> PathBuf {
         self.base.join(rel)
@@ -44,10 +41,7 @@ pub fn load_file(path: &Path) -> Res<Scene> {
         msg: format!("cannot read scene file: {e}"),
     })?;
     let base = path.parent().unwrap_or(Path::new("."));
-    let stem = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
     load_str(&text, path, base, &stem)
 }
 
@@ -63,12 +57,16 @@ pub fn load_str(text: &str, file: &Path, base: &Path, default_name: &str) -> Res
     let de = &mut serde_json::Deserializer::from_str(text);
     let spec: SceneSpec = serde_path_to_error::deserialize(de).map_err(|e| {
         let path = e.path().to_string();
-        let loc = if path == "." {
+        // A syntax error has no meaningful JSON path: point at its line (the column is in the message).
+        let inner = e.inner();
+        let loc = if inner.is_syntax() || inner.is_eof() {
+            format!("line {}", inner.line())
+        } else if path == "." {
             "JSON".to_string()
         } else {
             path
         };
-        ctx.err(loc, e.inner().to_string())
+        ctx.err(loc, inner.to_string())
     })?;
     build(&ctx, spec, default_name)
 }
@@ -102,35 +100,25 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
     let steps_per_frame = match (spec.steps_per_frame, spec.time_step) {
         (Some(n), None) if n >= 1 && n <= 100_000 => n as usize,
         (Some(n), None) => {
-            return Err(ctx.err(
-                "steps_per_frame",
-                format!("expected an integer in 1..=100000, got {n}"),
-            ))
+            return Err(ctx.err("steps_per_frame", format!("expected an integer in 1..=100000, got {n}")))
         }
         (None, Some(h)) => {
             let h = positive(ctx, "time_step", h)?;
             let n = frame_time / h;
             if (n - n.round()).abs() > 1e-6 * n || n.round() < 1.0 || n > 1e5 {
-                return Err(ctx.err(
-                    "time_step",
-                    format!("expected a divisor of the frame time {frame_time} s, got {h}"),
-                ));
+                return Err(
+                    ctx.err("time_step", format!("expected a divisor of the frame time {frame_time} s, got {h}"))
+                );
             }
             n.round() as usize
         }
         (None, None) => 1,
-        (Some(_), Some(_)) => {
-            return Err(ctx.err("time_step", "give steps_per_frame or time_step, not both"))
-        }
+        (Some(_), Some(_)) => return Err(ctx.err("time_step", "give steps_per_frame or time_step, not both")),
     };
     let frames = match (spec.frames, spec.end_time) {
         (Some(n), None) if n >= 1 && n <= 10_000_000 => n as usize,
-        (Some(n), None) => {
-            return Err(ctx.err("frames", format!("expected an integer ≥ 1, got {n}")))
-        }
-        (None, Some(t)) => (positive(ctx, "end_time", t)? / frame_time - 1e-9)
-            .ceil()
-            .max(1.0) as usize,
+        (Some(n), None) => return Err(ctx.err("frames", format!("expected an integer ≥ 1, got {n}"))),
+        (None, Some(t)) => (positive(ctx, "end_time", t)? / frame_time - 1e-9).ceil().max(1.0) as usize,
         (None, None) => return Err(ctx.err("frames", "expected frames or end_time")),
         (Some(_), Some(_)) => return Err(ctx.err("end_time", "give frames or end_time, not both")),
     };
@@ -147,10 +135,8 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
         return Err(ctx.err("cloths", "expected at least one cloth"));
     }
     let mut scene = Scene {
-        name: spec
-            .name
-            .clone()
-            .unwrap_or_else(|| default_name.to_string()),
+        file: ctx.file.to_path_buf(),
+        name: spec.name.clone().unwrap_or_else(|| default_name.to_string()),
         frame_time,
         steps_per_frame,
         frames,
@@ -163,19 +149,17 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
         obstacles: Vec::new(),
         collision: collision_params(ctx, spec.collision.as_ref())?,
     };
-    for (c, cs) in spec.cloths.iter().enumerate() {
-        add_cloth(ctx, &mut scene, c, cs)?;
-    }
-    scene
-        .mesh
-        .rebuild_topology()
-        .map_err(|e| ctx.err("cloths", e.to_string()))?;
-    let density: Vec<f64> = scene.materials.iter().map(|m| m.density).collect();
-    scene.mesh.compute_masses(&density);
+    // Obstacles first: handles may follow one.
     for (o, os) in spec.obstacles.iter().enumerate() {
         let obstacle = load_obstacle(ctx, o, os)?;
         scene.obstacles.push(obstacle);
     }
+    for (c, cs) in spec.cloths.iter().enumerate() {
+        add_cloth(ctx, &mut scene, c, cs)?;
+    }
+    scene.mesh.rebuild_topology().map_err(|e| ctx.err("cloths", e.to_string()))?;
+    let density: Vec<f64> = scene.materials.iter().map(|m| m.density).collect();
+    scene.mesh.compute_masses(&density);
     // Without obstacles a scene does no collision work unless it asks for self-collision.
     if spec.collision.as_ref().and_then(|c| c.self_collision).is_none() {
         scene.collision.self_collision = !scene.obstacles.is_empty();
@@ -214,6 +198,48 @@ fn collision_params(ctx: &Ctx, spec: Option<&CollisionSpec>) -> Res<CollisionPar
     Ok(p)
 }
 
+fn remesh_params(ctx: &Ctx, path: &str, r: &RemeshSpec) -> Res<Remesh> {
+    let mode = match r.mode.as_deref() {
+        None | Some("adaptive") => RemeshMode::Adaptive,
+        Some("uniform") => RemeshMode::Uniform,
+        Some(other) => return Err(ctx.err(format!("{path}.mode"), format!("expected \"adaptive\" or \"uniform\", got \"{other}\""))),
+    };
+    let opt = |field: &str, v: Option<f64>| v.map(|x| positive(ctx, &format!("{path}.{field}"), x)).transpose();
+    let size_min = positive(ctx, &format!("{path}.size[0]"), r.size[0])?;
+    let size_max = positive(ctx, &format!("{path}.size[1]"), r.size[1])?;
+    if size_min > size_max {
+        return Err(ctx.err(format!("{path}.size"), format!("expected [min, max] with min ≤ max, got [{size_min}, {size_max}]")));
+    }
+    let aspect_min = r.aspect_min.unwrap_or(0.2);
+    if !(aspect_min > 0.0 && aspect_min <= 1.0) {
+        return Err(ctx.err(format!("{path}.aspect_min"), format!("expected a number in (0, 1], got {aspect_min}")));
+    }
+    let combine = match r.combine.as_deref() {
+        None | Some("max") => Combine::Max,
+        Some("sum") => Combine::Sum,
+        Some(other) => return Err(ctx.err(format!("{path}.combine"), format!("expected \"max\" or \"sum\", got \"{other}\""))),
+    };
+    let every = match r.every {
+        None => 1,
+        Some(n) if (1..=100_000).contains(&n) => n as usize,
+        Some(n) => return Err(ctx.err(format!("{path}.every"), format!("expected an integer ≥ 1, got {n}"))),
+    };
+    Ok(Remesh {
+        mode,
+        sizing: SizingParams {
+            refine_angle: opt("refine_angle", r.refine_angle)?,
+            refine_compression: opt("refine_compression", r.refine_compression)?,
+            refine_velocity: opt("refine_velocity", r.refine_velocity)?,
+            refine_obstacle: r.refine_obstacle.unwrap_or(false),
+            size_min,
+            size_max,
+            aspect_min,
+            combine,
+        },
+        every,
+    })
+}
+
 fn non_negative(ctx: &Ctx, path: &str, v: f64) -> Res<f64> {
     if v >= 0.0 && v.is_finite() {
         Ok(v)
@@ -225,13 +251,8 @@ fn non_negative(ctx: &Ctx, path: &str, v: f64) -> Res<f64> {
 fn transform(ctx: &Ctx, path: &str, t: &TransformSpec) -> Res<Transform> {
     finite3(ctx, &format!("{path}.translate"), t.translate)?;
     if let Some(r) = t.rotate {
-        if !r.iter().all(|c| c.is_finite())
-            || (r[0] != 0.0 && Vec3::new(r[1], r[2], r[3]).norm() == 0.0)
-        {
-            return Err(ctx.err(
-                format!("{path}.rotate"),
-                "expected [degrees, axis x, y, z] with a non-zero axis",
-            ));
+        if !r.iter().all(|c| c.is_finite()) || (r[0] != 0.0 && Vec3::new(r[1], r[2], r[3]).norm() == 0.0) {
+            return Err(ctx.err(format!("{path}.rotate"), "expected [degrees, axis x, y, z] with a non-zero axis"));
         }
     }
     positive(ctx, &format!("{path}.scale"), t.scale)?;
@@ -250,35 +271,32 @@ fn motion(ctx: &Ctx, path: &str, keys: &[KeyframeSpec]) -> Res<Motion> {
         }
         if let Some(prev) = out.last().map(|k: &Keyframe| k.time) {
             if k.time <= prev {
-                return Err(ctx.err(
-                    format!("{p}.time"),
-                    format!("keyframe times must increase: {} after {prev}", k.time),
-                ));
+                return Err(
+                    ctx.err(format!("{p}.time"), format!("keyframe times must increase: {} after {prev}", k.time))
+                );
             }
         }
-        let t = TransformSpec {
-            translate: k.translate,
-            rotate: k.rotate,
-            scale: k.scale,
-        };
-        out.push(Keyframe {
-            time: k.time,
-            transform: transform(ctx, &p, &t)?,
-        });
+        let t = TransformSpec { translate: k.translate, rotate: k.rotate, scale: k.scale };
+        out.push(Keyframe { time: k.time, transform: transform(ctx, &p, &t)? });
     }
     Ok(Motion::new(out))
+}
+
+/// The path of a mesh file named by the scene field `field`; a missing file is that field's error.
+fn mesh_file(ctx: &Ctx, field: &str, rel: &str) -> Res<PathBuf> {
+    let full = ctx.resolve(rel);
+    match std::fs::metadata(&full) {
+        Ok(_) => Ok(full),
+        Err(e) => Err(ctx.err(field, format!("cannot read mesh file {}: {e}", full.display()))),
+    }
 }
 
 /// A single cloth's mesh in its own node numbering.
 fn cloth_mesh(ctx: &Ctx, path: &str, cs: &ClothSpec) -> Res<Mesh> {
     match (&cs.mesh, &cs.rectangle) {
         (Some(file), None) => {
-            let full = ctx.resolve(file);
-            let data = read_obj(&full).map_err(|msg| InputError {
-                file: full.clone(),
-                location: None,
-                msg,
-            })?;
+            let full = mesh_file(ctx, &format!("{path}.mesh"), file)?;
+            let data = read_obj(&full).map_err(|msg| InputError { file: full.clone(), location: None, msg })?;
             mesh_from_obj(&full, &data, cs.uv_scale)
         }
         (None, Some(r)) => {
@@ -293,22 +311,15 @@ fn cloth_mesh(ctx: &Ctx, path: &str, cs: &ClothSpec) -> Res<Mesh> {
             }
             rectangle(w, h, nx as usize, ny as usize).map_err(|e| ctx.err(path, e.to_string()))
         }
-        _ => Err(ctx.err(
-            path,
-            "expected exactly one of \"mesh\" (OBJ file) or \"rectangle\"",
-        )),
+        _ => Err(ctx.err(path, "expected exactly one of \"mesh\" (OBJ file) or \"rectangle\"")),
     }
 }
 
 fn add_cloth(ctx: &Ctx, scene: &mut Scene, c: usize, cs: &ClothSpec) -> Res<()> {
     let path = format!("cloths[{c}]");
     positive(ctx, &format!("{path}.uv_scale"), cs.uv_scale)?;
-    let material = resolve(&cs.material).map_err(|(field, msg)| {
-        ctx.err(
-            format!("{path}.material.{field}"),
-            format!("expected {msg}"),
-        )
-    })?;
+    let material = resolve(&cs.material)
+        .map_err(|(field, msg)| ctx.err(format!("{path}.material.{field}"), format!("expected {msg}")))?;
     let xf = transform(ctx, &format!("{path}.transform"), &cs.transform)?;
     let velocity = finite3(ctx, &format!("{path}.velocity"), cs.velocity)?;
     let mut local = cloth_mesh(ctx, &path, cs)?;
@@ -319,59 +330,66 @@ fn add_cloth(ctx: &Ctx, scene: &mut Scene, c: usize, cs: &ClothSpec) -> Res<()> 
     let (node0, vert0) = (scene.mesh.nodes.len(), scene.mesh.verts.len());
     let name = cs.name.clone().unwrap_or_else(|| format!("cloth{c}"));
     for n in &local.nodes {
-        scene.mesh.nodes.push(Node {
-            x: xf.apply(&n.x),
-            v: velocity,
-            mass: 0.0,
-            cloth: c as u16,
-        });
+        scene.mesh.nodes.push(Node { x: xf.apply(&n.x), v: velocity, mass: 0.0, cloth: c as u16 });
     }
     for v in &local.verts {
-        scene.mesh.verts.push(Vert {
-            u: v.u,
-            node: NodeId(v.node.0 + node0 as u32),
-        });
+        scene.mesh.verts.push(Vert { u: v.u, node: NodeId(v.node.0 + node0 as u32) });
     }
     for f in &local.faces {
-        scene.mesh.faces.push(Face {
-            v: f.v.map(|v| VertId(v.0 + vert0 as u32)),
-            material: c as u16,
-        });
+        scene.mesh.faces.push(Face { v: f.v.map(|v| VertId(v.0 + vert0 as u32)), material: c as u16 });
     }
     for (h, hs) in cs.handles.iter().enumerate() {
         let hp = format!("{path}.handles[{h}]");
         let nodes = handle_nodes(ctx, &hp, hs, &local)?;
-        let anchors = nodes
-            .iter()
-            .map(|&n| scene.mesh.nodes[n + node0].x)
-            .collect();
-        let motion = hs
-            .motion
-            .as_ref()
-            .map(|m| motion(ctx, &format!("{hp}.motion"), m))
-            .transpose()?;
+        let anchors = nodes.iter().map(|&n| scene.mesh.nodes[n + node0].x).collect();
+        let motion = hs.motion.as_ref().map(|m| motion(ctx, &format!("{hp}.motion"), m)).transpose()?;
+        let follow = match &hs.obstacle {
+            Some(_) if hs.motion.is_some() => {
+                return Err(ctx.err(format!("{hp}.obstacle"), "give motion or obstacle, not both"))
+            }
+            Some(name) => Some(follow_obstacle(ctx, &format!("{hp}.obstacle"), name, &scene.obstacles)?),
+            None => None,
+        };
         let start = hs.start_time.unwrap_or(f64::NEG_INFINITY);
         let end = hs.end_time.unwrap_or(f64::INFINITY);
         if start.is_nan() || end.is_nan() || end <= start {
-            return Err(ctx.err(
-                format!("{hp}.end_time"),
-                format!("expected end_time > start_time, got {start} .. {end}"),
-            ));
+            return Err(
+                ctx.err(format!("{hp}.end_time"), format!("expected end_time > start_time, got {start} .. {end}"))
+            );
         }
         scene.handles.push(Handle {
             nodes: nodes.iter().map(|n| n + node0).collect(),
             anchors,
             motion,
+            follow,
             start,
             end,
         });
     }
-    scene.cloths.push(Cloth {
-        name,
-        material: scene.materials.len(),
-    });
+    let remesh = cs.remesh.as_ref().map(|r| remesh_params(ctx, &format!("{path}.remesh"), r)).transpose()?;
+    scene.cloths.push(Cloth { name, material: scene.materials.len(), remesh });
     scene.materials.push(material);
     Ok(())
+}
+
+/// The obstacle a handle follows, by name; it must be rigid (a per-frame sequence deforms, so
+/// it carries no single transform).
+fn follow_obstacle(ctx: &Ctx, path: &str, name: &str, obstacles: &[Obstacle]) -> Res<FollowObstacle> {
+    let Some(o) = obstacles.iter().position(|ob| ob.name == name) else {
+        let names: Vec<String> = obstacles.iter().map(|ob| format!("\"{}\"", ob.name)).collect();
+        let known = if names.is_empty() { "the scene has none".to_string() } else { names.join(", ") };
+        return Err(ctx.err(path, format!("no obstacle named \"{name}\" (obstacles: {known})")));
+    };
+    if obstacles.iter().filter(|ob| ob.name == name).count() > 1 {
+        return Err(ctx.err(path, format!("several obstacles are named \"{name}\"; name them apart")));
+    }
+    if matches!(obstacles[o].shape, ObstacleShape::Sequence(_)) {
+        return Err(ctx.err(
+            path,
+            format!("obstacle \"{name}\" is a per-frame sequence; a handle can only follow a rigid obstacle"),
+        ));
+    }
+    Ok(FollowObstacle::new(o, &obstacles[o]))
 }
 
 fn handle_nodes(ctx: &Ctx, path: &str, hs: &HandleSpec, mesh: &Mesh) -> Res<Vec<usize>> {
@@ -408,19 +426,11 @@ fn handle_nodes(ctx: &Ctx, path: &str, hs: &HandleSpec, mesh: &Mesh) -> Res<Vec<
 }
 
 fn mesh_from_obj(file: &Path, d: &ObjData, uv_scale: f64) -> Res<Mesh> {
-    let line_err = |line: usize, msg: String| InputError {
-        file: file.to_path_buf(),
-        location: Some(format!("line {line}")),
-        msg,
-    };
+    let line_err =
+        |line: usize, msg: String| InputError { file: file.to_path_buf(), location: Some(format!("line {line}")), msg };
     let mut mesh = Mesh::default();
     for p in &d.positions {
-        mesh.nodes.push(Node {
-            x: *p,
-            v: Vec3::zeros(),
-            mass: 0.0,
-            cloth: 0,
-        });
+        mesh.nodes.push(Node { x: *p, v: Vec3::zeros(), mass: 0.0, cloth: 0 });
     }
     let has_vt = d.triangles[0][0].vt.is_some();
     if has_vt {
@@ -435,17 +445,11 @@ fn mesh_from_obj(file: &Path, d: &ObjData, uv_scale: f64) -> Res<Mesh> {
                     Some(_) => {
                         return Err(line_err(
                             d.face_line[t],
-                            format!(
-                                "texture coordinate {} is used with two different vertices",
-                                vt + 1
-                            ),
+                            format!("texture coordinate {} is used with two different vertices", vt + 1),
                         ))
                     }
                     None => {
-                        mesh.verts.push(Vert {
-                            u: d.texcoords[vt] * uv_scale,
-                            node: NodeId(c.v as u32),
-                        });
+                        mesh.verts.push(Vert { u: d.texcoords[vt] * uv_scale, node: NodeId(c.v as u32) });
                         let id = VertId(mesh.verts.len() as u32 - 1);
                         vert_of_vt[vt] = Some(id);
                         id
@@ -453,28 +457,15 @@ fn mesh_from_obj(file: &Path, d: &ObjData, uv_scale: f64) -> Res<Mesh> {
                 };
                 face[k] = id;
             }
-            mesh.faces.push(Face {
-                v: face,
-                material: 0,
-            });
+            mesh.faces.push(Face { v: face, material: 0 });
         }
     } else {
-        let uv = flatten(d).map_err(|msg| InputError {
-            file: file.to_path_buf(),
-            location: None,
-            msg,
-        })?;
+        let uv = flatten(d).map_err(|msg| InputError { file: file.to_path_buf(), location: None, msg })?;
         for (i, u) in uv.into_iter().enumerate() {
-            mesh.verts.push(Vert {
-                u,
-                node: NodeId(i as u32),
-            });
+            mesh.verts.push(Vert { u, node: NodeId(i as u32) });
         }
         for tri in &d.triangles {
-            mesh.faces.push(Face {
-                v: tri.map(|c| VertId(c.v as u32)),
-                material: 0,
-            });
+            mesh.faces.push(Face { v: tri.map(|c| VertId(c.v as u32)), material: 0 });
         }
     }
     orient_faces(&mut mesh).map_err(|(t, msg)| line_err(d.face_line[t], msg))?;
@@ -484,48 +475,45 @@ fn mesh_from_obj(file: &Path, d: &ObjData, uv_scale: f64) -> Res<Mesh> {
         n.iter().for_each(|&i| used[i] = true);
         let [a, b, c] = n.map(|i| mesh.nodes[i].x);
         let scale = (b - a).norm().max((c - a).norm()).max(1e-300);
-        if n[0] == n[1]
-            || n[1] == n[2]
-            || n[0] == n[2]
-            || (b - a).cross(&(c - a)).norm() <= 1e-12 * scale * scale
-        {
-            return Err(line_err(
-                d.face_line[f],
-                "degenerate face (repeated vertex or zero area)".into(),
-            ));
+        if n[0] == n[1] || n[1] == n[2] || n[0] == n[2] || (b - a).cross(&(c - a)).norm() <= 1e-12 * scale * scale {
+            return Err(line_err(d.face_line[f], "degenerate face (repeated vertex or zero area)".into()));
         }
     }
     if let Some(i) = used.iter().position(|u| !u) {
-        return Err(line_err(
-            d.position_line[i],
-            format!("vertex {} is used by no face", i + 1),
-        ));
+        return Err(line_err(d.position_line[i], format!("vertex {} is used by no face", i + 1)));
+    }
+    // Checked before the topology, where a repeated face would look like a non-manifold edge.
+    let mut seen = std::collections::HashMap::new();
+    for f in 0..mesh.faces.len() {
+        let mut key = mesh.face_nodes(f);
+        key.sort_unstable();
+        if let Some(other) = seen.insert(key, f) {
+            let msg = format!("duplicate face (same vertices as line {})", d.face_line[other]);
+            return Err(line_err(d.face_line[f], msg));
+        }
     }
     mesh.rebuild_topology().map_err(|e| match e {
-        MeshError::NonManifoldEdge { a, b } => InputError {
-            file: file.to_path_buf(),
-            location: None,
-            msg: format!("non-manifold: the edge between vertices {} (line {}) and {} (line {}) has more than two faces", a + 1, d.position_line[a as usize], b + 1, d.position_line[b as usize]),
-        },
+        MeshError::NonManifoldEdge { a, b } => {
+            // The third face (in file order) on the edge is the one to blame.
+            let (a, b) = (a as usize, b as usize);
+            let on_edge = |f: &usize| {
+                let n = mesh.face_nodes(*f);
+                n.contains(&a) && n.contains(&b)
+            };
+            let third = (0..mesh.faces.len()).filter(on_edge).nth(2).unwrap_or(0);
+            let msg = format!("non-manifold: the edge between vertices {} and {} already has two faces", a + 1, b + 1);
+            line_err(d.face_line[third], msg)
+        }
         other => InputError { file: file.to_path_buf(), location: None, msg: other.to_string() },
     })?;
     mesh.validate().map_err(|e| match e {
-        MeshError::DuplicateFace { face, other } => line_err(
-            d.face_line[face],
-            format!(
-                "duplicate face (same vertices as line {})",
-                d.face_line[other]
-            ),
-        ),
-        MeshError::BadMaterialArea { face, .. } => line_err(
-            d.face_line[face],
-            "face has zero material-space (texture) area".into(),
-        ),
-        other => InputError {
-            file: file.to_path_buf(),
-            location: None,
-            msg: other.to_string(),
-        },
+        MeshError::DuplicateFace { face, other } => {
+            line_err(d.face_line[face], format!("duplicate face (same vertices as line {})", d.face_line[other]))
+        }
+        MeshError::BadMaterialArea { face, .. } => {
+            line_err(d.face_line[face], "face has zero material-space (texture) area".into())
+        }
+        other => InputError { file: file.to_path_buf(), location: None, msg: other.to_string() },
     })?;
     Ok(mesh)
 }
@@ -545,32 +533,17 @@ fn flatten(d: &ObjData) -> Result<Vec<Vec2>, String> {
         return Err("cannot find the plane of a mesh without texture coordinates".into());
     }
     let normal = normal.normalize();
-    let extent = d
-        .positions
-        .iter()
-        .map(|p| (p - centroid).norm())
-        .fold(0.0, f64::max);
-    let off = d
-        .positions
-        .iter()
-        .map(|p| (p - centroid).dot(&normal).abs())
-        .fold(0.0, f64::max);
+    let extent = d.positions.iter().map(|p| (p - centroid).norm()).fold(0.0, f64::max);
+    let off = d.positions.iter().map(|p| (p - centroid).dot(&normal).abs()).fold(0.0, f64::max);
     if off > 1e-6 * extent.max(1e-12) {
         return Err(format!(
             "the mesh has no texture coordinates (vt) and is not flat (off-plane by {off:.3e} m): give material coordinates as vt"
         ));
     }
-    let seed = if normal.x.abs() < 0.9 {
-        Vec3::x()
-    } else {
-        Vec3::y()
-    };
+    let seed = if normal.x.abs() < 0.9 { Vec3::x() } else { Vec3::y() };
     let e1 = (seed - normal * normal.dot(&seed)).normalize();
     let e2 = normal.cross(&e1);
-    Ok(d.positions
-        .iter()
-        .map(|p| Vec2::new((p - centroid).dot(&e1), (p - centroid).dot(&e2)))
-        .collect())
+    Ok(d.positions.iter().map(|p| Vec2::new((p - centroid).dot(&e1), (p - centroid).dot(&e2))).collect())
 }
 
 /// Material-space faces must be counter-clockwise: if all are clockwise (mirrored UVs) flip
@@ -612,23 +585,14 @@ fn load_obstacle(ctx: &Ctx, o: usize, os: &ObstacleSpec) -> Res<Obstacle> {
     .filter(|b| **b)
     .count();
     if count != 1 {
-        return Err(ctx.err(
-            &path,
-            "expected exactly one shape: mesh, sphere, plane, box, capsule or sequence",
-        ));
+        return Err(ctx.err(&path, "expected exactly one shape: mesh, sphere, plane, box, capsule or sequence"));
     }
     let shape = if let Some(file) = &os.mesh {
-        let full = ctx.resolve(file);
-        let data = read_obj(&full).map_err(|msg| InputError {
-            file: full.clone(),
-            location: None,
-            msg,
-        })?;
+        let full = mesh_file(ctx, &format!("{path}.mesh"), file)?;
+        let data = read_obj(&full).map_err(|msg| InputError { file: full.clone(), location: None, msg })?;
         ObstacleShape::Mesh(data)
     } else if let Some(s) = &os.sphere {
-        ObstacleShape::Sphere {
-            radius: positive(ctx, &format!("{path}.sphere.radius"), s.radius)?,
-        }
+        ObstacleShape::Sphere { radius: positive(ctx, &format!("{path}.sphere.radius"), s.radius)? }
     } else if let Some(p) = &os.plane {
         ObstacleShape::Plane {
             size: [
@@ -656,11 +620,7 @@ fn load_obstacle(ctx: &Ctx, o: usize, os: &ObstacleSpec) -> Res<Obstacle> {
         name: os.name.clone().unwrap_or_else(|| format!("obstacle{o}")),
         shape,
         transform: transform(ctx, &format!("{path}.transform"), &os.transform)?,
-        motion: os
-            .motion
-            .as_ref()
-            .map(|m| motion(ctx, &format!("{path}.motion"), m))
-            .transpose()?,
+        motion: os.motion.as_ref().map(|m| motion(ctx, &format!("{path}.motion"), m)).transpose()?,
     })
 }
 
@@ -682,19 +642,10 @@ fn load_sequence(ctx: &Ctx, path: &str, seq: &super::spec::SequenceSpec) -> Res<
     let mut mesh: Option<ObjData> = None;
     let mut frames = Vec::with_capacity(seq.count as usize);
     for k in 0..seq.count {
-        let name = format_frame(&seq.pattern, seq.first + k)
-            .map_err(|msg| ctx.err(format!("{path}.pattern"), msg))?;
+        let name = format_frame(&seq.pattern, seq.first + k).map_err(|msg| ctx.err(format!("{path}.pattern"), msg))?;
         let full = ctx.resolve(&name);
-        let data = read_obj(&full).map_err(|msg| InputError {
-            file: full.clone(),
-            location: None,
-            msg,
-        })?;
-        let file_err = |msg: String| InputError {
-            file: full.clone(),
-            location: None,
-            msg,
-        };
+        let data = read_obj(&full).map_err(|msg| InputError { file: full.clone(), location: None, msg })?;
+        let file_err = |msg: String| InputError { file: full.clone(), location: None, msg };
         if let Some(m) = &mesh {
             if data.positions.len() != m.positions.len() {
                 return Err(file_err(format!(
@@ -704,15 +655,9 @@ fn load_sequence(ctx: &Ctx, path: &str, seq: &super::spec::SequenceSpec) -> Res<
                 )));
             }
             let same_faces = data.triangles.len() == m.triangles.len()
-                && data
-                    .triangles
-                    .iter()
-                    .zip(&m.triangles)
-                    .all(|(a, b)| a.map(|c| c.v) == b.map(|c| c.v));
+                && data.triangles.iter().zip(&m.triangles).all(|(a, b)| a.map(|c| c.v) == b.map(|c| c.v));
             if !same_faces {
-                return Err(file_err(
-                    "sequence frame has different faces from the first frame".into(),
-                ));
+                return Err(file_err("sequence frame has different faces from the first frame".into()));
             }
         } else if data.triangles.is_empty() {
             return Err(file_err("the mesh has no faces".into()));
@@ -720,12 +665,7 @@ fn load_sequence(ctx: &Ctx, path: &str, seq: &super::spec::SequenceSpec) -> Res<
         frames.push(data.positions.clone());
         mesh.get_or_insert(data);
     }
-    Ok(super::MeshSequence {
-        mesh: mesh.expect("count ≥ 1 checked above"),
-        frames,
-        start_time: seq.start_time,
-        fps,
-    })
+    Ok(super::MeshSequence { mesh: mesh.expect("count ≥ 1 checked above"), frames, start_time: seq.start_time, fps })
 }
 
 /// Substitutes the frame number for the one printf-style `%d` / `%0Nd` in `pattern`.
@@ -737,15 +677,7 @@ fn format_frame(pattern: &str, n: i64) -> Result<String, String> {
     if !rest[digits..].starts_with('d') || rest[digits + 1..].contains('%') {
         return Err(bad());
     }
-    let width: usize = if digits == 0 {
-        0
-    } else {
-        rest[..digits].parse().map_err(|_| bad())?
-    };
-    let number = if rest.starts_with('0') {
-        format!("{n:0width$}")
-    } else {
-        format!("{n:width$}")
-    };
+    let width: usize = if digits == 0 { 0 } else { rest[..digits].parse().map_err(|_| bad())? };
+    let number = if rest.starts_with('0') { format!("{n:0width$}") } else { format!("{n:width$}") };
     Ok(format!("{}{number}{}", &pattern[..start], &rest[digits + 1..]))
 }

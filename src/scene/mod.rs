@@ -14,6 +14,7 @@ use crate::forces::wind::Wind;
 use crate::io::obj::ObjData;
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
+use crate::sizing::SizingParams;
 use material::Material;
 use motion::{Motion, Transform};
 
@@ -43,17 +44,67 @@ impl std::error::Error for InputError {}
 pub struct Cloth {
     pub name: String,
     pub material: usize,
+    /// Remeshing of this cloth; `None` keeps its input mesh.
+    pub remesh: Option<Remesh>,
 }
 
-/// Pinned nodes, fixed or following a keyframed motion, active during `[start, end)`.
+/// Whether a cloth's mesh adapts every few frames or is refined once.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RemeshMode {
+    Adaptive,
+    Uniform,
+}
+
+/// A cloth's resolved remeshing parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Remesh {
+    pub mode: RemeshMode,
+    pub sizing: SizingParams,
+    /// Remesh every this many frames.
+    pub every: usize,
+}
+
+/// Pinned nodes, fixed, following a keyframed motion or following an obstacle, active during
+/// `[start, end)`.
 #[derive(Clone, Debug)]
 pub struct Handle {
     pub nodes: Vec<usize>,
     /// Initial world positions of `nodes`; the motion moves these.
     pub anchors: Vec<Vec3>,
     pub motion: Option<Motion>,
+    /// Set instead of `motion` when the handle rides on an obstacle.
+    pub follow: Option<FollowObstacle>,
     pub start: Real,
     pub end: Real,
+}
+
+/// A handle carried rigidly by an obstacle: anchors move by T(t) ∘ T(0)⁻¹, with T the
+/// obstacle's full local-to-world transform (`Obstacle::transform_at`).
+#[derive(Clone, Debug)]
+pub struct FollowObstacle {
+    /// Index into `Scene::obstacles`.
+    pub obstacle: usize,
+    transform: Transform,
+    motion: Option<Motion>,
+    /// T(0)⁻¹.
+    rest_inverse: Transform,
+}
+
+impl FollowObstacle {
+    /// Follows `obstacles[index]` (a rigid obstacle: not a per-frame sequence).
+    pub fn new(index: usize, obstacle: &Obstacle) -> Self {
+        FollowObstacle {
+            obstacle: index,
+            transform: obstacle.transform,
+            motion: obstacle.motion.clone(),
+            rest_inverse: obstacle.transform_at(0.0).inverse(),
+        }
+    }
+
+    /// The rigid displacement since t = 0: T(t) ∘ T(0)⁻¹.
+    pub fn displacement(&self, t: Real) -> Transform {
+        transform_at(&self.transform, self.motion.as_ref(), t).compose(&self.rest_inverse)
+    }
 }
 
 impl Handle {
@@ -63,9 +114,10 @@ impl Handle {
 
     /// Target position of the `k`-th node at time `t`.
     pub fn target(&self, k: usize, t: Real) -> Vec3 {
-        match &self.motion {
-            Some(m) => m.eval(t).apply(&self.anchors[k]),
-            None => self.anchors[k],
+        match (&self.follow, &self.motion) {
+            (Some(f), _) => f.displacement(t).apply(&self.anchors[k]),
+            (None, Some(m)) => m.eval(t).apply(&self.anchors[k]),
+            (None, None) => self.anchors[k],
         }
     }
 }
@@ -74,10 +126,19 @@ impl Handle {
 #[derive(Clone, Debug)]
 pub enum ObstacleShape {
     Mesh(ObjData),
-    Sphere { radius: Real },
-    Plane { size: [Real; 2] },
-    Box { size: [Real; 3] },
-    Capsule { radius: Real, length: Real },
+    Sphere {
+        radius: Real,
+    },
+    Plane {
+        size: [Real; 2],
+    },
+    Box {
+        size: [Real; 3],
+    },
+    Capsule {
+        radius: Real,
+        length: Real,
+    },
     /// A deforming mesh given as one OBJ per frame.
     Sequence(MeshSequence),
 }
@@ -99,6 +160,20 @@ pub struct Obstacle {
     pub shape: ObstacleShape,
     pub transform: Transform,
     pub motion: Option<Motion>,
+}
+
+impl Obstacle {
+    /// The local-to-world transform at `t`: `motion(t) ∘ transform`.
+    pub fn transform_at(&self, t: Real) -> Transform {
+        transform_at(&self.transform, self.motion.as_ref(), t)
+    }
+}
+
+fn transform_at(transform: &Transform, motion: Option<&Motion>, t: Real) -> Transform {
+    match motion {
+        Some(m) => m.eval(t).compose(transform),
+        None => *transform,
+    }
 }
 
 /// Collision parameters (scene `collision` block, with defaults).
@@ -133,6 +208,8 @@ impl Default for CollisionParams {
 #[derive(Clone, Debug)]
 pub struct Scene {
     pub name: String,
+    /// The scene file (or a description of the source), for error messages.
+    pub file: PathBuf,
     pub frame_time: Real,
     pub steps_per_frame: usize,
     pub frames: usize,

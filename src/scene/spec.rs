@@ -109,6 +109,41 @@ pub struct ClothSpec {
     pub material: MaterialSpec,
     #[serde(default)]
     pub handles: Vec<HandleSpec>,
+    /// Adaptive remeshing; absent = the input mesh is kept.
+    #[serde(default)]
+    pub remesh: Option<RemeshSpec>,
+}
+
+/// Remeshing of one cloth (Narain et al. 2012). A missing criterion is off.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct RemeshSpec {
+    /// `adaptive` (default) or `uniform` (refined once to `size[0]`, never remeshed).
+    #[serde(default)]
+    pub mode: Option<String>,
+    /// Radians a face may bend through.
+    #[serde(default)]
+    pub refine_angle: Option<f64>,
+    /// Compression a face may buckle through.
+    #[serde(default)]
+    pub refine_compression: Option<f64>,
+    /// Velocity difference (m/s) allowed across a face.
+    #[serde(default)]
+    pub refine_velocity: Option<f64>,
+    /// Refine near obstacles (default off).
+    #[serde(default)]
+    pub refine_obstacle: Option<bool>,
+    /// [min, max] edge length (m).
+    pub size: [f64; 2],
+    /// Smallest aspect ratio, in (0, 1] (default 0.2).
+    #[serde(default)]
+    pub aspect_min: Option<f64>,
+    /// How criteria combine: `max` (default, tensor max) or `sum`.
+    #[serde(default)]
+    pub combine: Option<String>,
+    /// Remesh every N frames (default 1).
+    #[serde(default)]
+    pub every: Option<i64>,
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -134,11 +169,7 @@ pub struct TransformSpec {
 
 impl Default for TransformSpec {
     fn default() -> Self {
-        TransformSpec {
-            translate: [0.0; 3],
-            rotate: None,
-            scale: 1.0,
-        }
+        TransformSpec { translate: [0.0; 3], rotate: None, scale: 1.0 }
     }
 }
 
@@ -194,6 +225,9 @@ pub struct HandleSpec {
     /// Keyframed rigid motion applied to the handle's initial positions.
     #[serde(default)]
     pub motion: Option<Vec<KeyframeSpec>>,
+    /// Name of a (rigid) obstacle the handle rides on; exclusive with `motion`.
+    #[serde(default)]
+    pub obstacle: Option<String>,
     /// The handle holds from `start_time` until `end_time` (seconds), then releases.
     #[serde(default)]
     pub start_time: Option<f64>,

@@ -1,11 +1,12 @@
 //! The simulation: state, the time step as a list of named, timed stages (`step`), and frame
 //! measurements.
 
+mod adapt;
 mod run;
 mod step;
 pub mod timers;
 
-pub use run::{run, RunOptions};
+pub use run::{run, RunError, RunOptions};
 
 use crate::collision::obstacle::ObstacleBody;
 use crate::collision::sdf::MeshSdf;
@@ -15,7 +16,7 @@ use crate::forces::{edge_angles, RestState};
 use crate::io::stats::FrameStats;
 use crate::math::Real;
 use crate::mesh::Mesh;
-use crate::scene::{InputError, Scene};
+use crate::scene::{InputError, RemeshMode, Scene};
 use crate::solver::pattern::BlockPattern;
 use crate::solver::{ImplicitSystem, SolveError};
 use timers::StageTimers;
@@ -52,6 +53,10 @@ pub struct Simulation {
     pub timers: StageTimers,
     /// Cloth nodes pushed out of obstacles at load.
     pub pushed_out: usize,
+    /// Frames completed.
+    pub frame: usize,
+    /// Remeshing work since last taken (for stats).
+    pub remesh_stats: crate::remesh::RemeshStats,
 }
 
 impl Simulation {
@@ -62,12 +67,7 @@ impl Simulation {
             .map_err(|f| SimError::Mesh(format!("face {f} is degenerate in material space")))?;
         let system = ImplicitSystem::new(BlockPattern::new(&mesh, &rest.hinges, &[]))
             .map_err(|source| SimError::Solve { step: 0, time: 0.0, source })?;
-        let mut node_area = vec![0.0; mesh.nodes.len()];
-        for f in 0..mesh.faces.len() {
-            for n in mesh.face_nodes(f) {
-                node_area[n] += rest.membrane[f].area / 3.0;
-            }
-        }
+        let node_area = adapt::node_areas(&mesh, &rest);
         let collisions = (!scene.obstacles.is_empty() || scene.collision.self_collision).then(|| {
             let bodies = scene.obstacles.iter().map(ObstacleBody::new).collect();
             CollisionWorld::new(scene.collision.clone(), bodies, 0.0)
@@ -86,8 +86,12 @@ impl Simulation {
             steps: 0,
             timers: StageTimers::default(),
             pushed_out: 0,
+            frame: 0,
+            remesh_stats: Default::default(),
         };
-        sim.push_out_initial()?;
+        sim.remesh(RemeshMode::Uniform)?;
+        let tolerance = sim.scene.collision.push_out_tolerance;
+        sim.pushed_out = sim.push_out(Some(tolerance))?;
         Ok(sim)
     }
 
@@ -95,13 +99,16 @@ impl Simulation {
         &self.rest_angles
     }
 
-    /// Nodes registered slightly inside an obstacle are moved out along its surface normal to
-    /// the repulsion thickness before the first step; deeper than the tolerance is an error.
-    fn push_out_initial(&mut self) -> Result<(), SimError> {
-        let Some(world) = &self.collisions else { return Ok(()) };
-        let (th, tol) = (world.params.thickness, world.params.push_out_tolerance);
+    /// Nodes inside an obstacle are moved out along its surface normal to the repulsion
+    /// thickness: at load for garments registered slightly inside a body (deeper than
+    /// `tolerance` is an error), and after a remesh. Returns how many moved.
+    fn push_out(&mut self, tolerance: Option<Real>) -> Result<usize, SimError> {
+        let Some(world) = &self.collisions else { return Ok(0) };
+        let th = world.params.thickness;
+        let tol = tolerance.unwrap_or(Real::INFINITY);
+        let mut pushed = 0;
         for (b, body) in world.bodies.iter().enumerate() {
-            let sdf = MeshSdf::new(body.triangles(), &body.positions_at(0.0));
+            let sdf = MeshSdf::new(body.triangles(), &body.positions_at(self.time));
             let mut too_deep = vec![0usize; self.scene.cloths.len()];
             let mut moves = Vec::new();
             for (i, node) in self.mesh.nodes.iter().enumerate() {
@@ -116,7 +123,7 @@ impl Simulation {
             }
             if let Some(c) = too_deep.iter().position(|&k| k > 0) {
                 return Err(SimError::Input(InputError {
-                    file: format!("scene {}", self.scene.name).into(),
+                    file: self.scene.file.clone(),
                     location: Some(format!("cloths[{c}]")),
                     msg: format!(
                         "cloth '{}' has {} nodes inside obstacle '{}' deeper than the push-out tolerance {} m (collision.push_out_tolerance)",
@@ -124,12 +131,12 @@ impl Simulation {
                     ),
                 }));
             }
-            self.pushed_out += moves.len();
+            pushed += moves.len();
             for (i, p) in moves {
                 self.mesh.nodes[i].x = p;
             }
         }
-        Ok(())
+        Ok(pushed)
     }
 
     /// Elastic energy (membrane + bending) of the current state.
@@ -158,7 +165,10 @@ impl Simulation {
         world
             .bodies
             .iter()
-            .map(|body| MeshSdf::new(body.triangles(), &body.positions_at(self.time)).count_deeper_than(&x, 0.5 * world.params.thickness))
+            .map(|body| {
+                MeshSdf::new(body.triangles(), &body.positions_at(self.time))
+                    .count_deeper_than(&x, 0.5 * world.params.thickness)
+            })
             .sum()
     }
 

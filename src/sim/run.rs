@@ -5,7 +5,8 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use crate::io::obj::{frame_obj, obstacle_obj};
-use crate::io::stats::{CollisionFrameStats, RunStats};
+use crate::io::stats::{CollisionFrameStats, RemeshFrameStats, RunStats};
+use crate::scene::RemeshMode;
 use crate::io::write_atomic;
 use crate::scene::Scene;
 
@@ -49,11 +50,9 @@ pub fn run(scene: Scene, opts: &RunOptions) -> Result<RunStats, RunError> {
     let digits = frames.to_string().len().max(4);
     let frame_path = |f: usize| opts.out_dir.join(format!("frame_{f:0digits$}.obj"));
     let stats_path = opts.out_dir.join("stats.json");
-    let mut stats = RunStats {
-        scene: sim.scene.name.clone(),
-        mode: "uniform".into(),
-        ..Default::default()
-    };
+    let adaptive = sim.scene.cloths.iter().any(|c| c.remesh.as_ref().is_some_and(|r| r.mode == RemeshMode::Adaptive));
+    let mode = if adaptive { "adaptive" } else { "uniform" };
+    let mut stats = RunStats { scene: sim.scene.name.clone(), mode: mode.into(), ..Default::default() };
 
     let write_frame = |sim: &mut Simulation, f: usize| -> Result<(), RunError> {
         let path = frame_path(f);
@@ -90,6 +89,10 @@ pub fn run(scene: Scene, opts: &RunOptions) -> Result<RunStats, RunError> {
         }
         write_frame(&mut sim, f)?;
         let mut fs = sim.measure(f);
+        if adaptive {
+            let r = std::mem::take(&mut sim.remesh_stats);
+            fs.remesh = Some(RemeshFrameStats { splits: r.splits, flips: r.flips, collapses: r.collapses });
+        }
         if sim.collisions.is_some() {
             let clock = Instant::now();
             let c = std::mem::take(&mut sim.counters);

@@ -5,6 +5,7 @@
 use crate::collision::friction::{apply_friction, FrictionContact, FrictionState};
 use crate::collision::proximity::Contact;
 use crate::math::{Real, Vec3};
+use crate::scene::RemeshMode;
 use crate::solver::pattern::BlockPattern;
 use crate::solver::{ImplicitSystem, StepInput};
 
@@ -165,8 +166,21 @@ impl Simulation {
         apply_friction(&mut state, &fc, h);
     }
 
-    /// Advances one frame (the scene's steps per frame).
+    /// Advances one frame (the scene's steps per frame), remeshing adaptive cloths first when due.
     pub fn advance_frame(&mut self) -> Result<(), SimError> {
+        let every = self
+            .scene
+            .cloths
+            .iter()
+            .filter_map(|c| c.remesh.as_ref().filter(|r| r.mode == RemeshMode::Adaptive).map(|r| r.every))
+            .min();
+        if every.is_some_and(|e| self.frame % e == 0) {
+            let s = self.remesh(RemeshMode::Adaptive)?;
+            self.remesh_stats.splits += s.splits;
+            self.remesh_stats.flips += s.flips;
+            self.remesh_stats.collapses += s.collapses;
+        }
+        self.frame += 1;
         let h = self.scene.time_step();
         for _ in 0..self.scene.steps_per_frame {
             self.step(h)?;

@@ -153,14 +153,18 @@ pub fn face_sizing(s: &FaceState, p: &SizingParams) -> Mat2 {
     clamp_metric(&m, p)
 }
 
-/// Sizing of every face of `mesh` (clamped), with `planes[node]` the nearest obstacle plane of
+/// Sizing of every face of `mesh` (clamped) with the parameters of its material (cloth),
+/// `params[material]`, zero for a cloth without; `planes[node]` is the nearest obstacle plane of
 /// each node within range.
-pub fn face_metrics(mesh: &Mesh, p: &SizingParams, planes: &[Option<ObstaclePlane>]) -> Vec<Mat2> {
+pub fn face_metrics(mesh: &Mesh, params: &[Option<SizingParams>], planes: &[Option<ObstaclePlane>]) -> Vec<Mat2> {
     let angles = edge_angles(mesh);
     let normals = mesh.node_normals();
     (0..mesh.faces.len())
         .into_par_iter()
         .map(|f| {
+            let Some(p) = params.get(mesh.faces[f].material as usize).and_then(Option::as_ref) else {
+                return Mat2::zeros();
+            };
             let ids = mesh.face_nodes(f);
             let fe = mesh.face_edges[f];
             let state = FaceState {
