@@ -5,8 +5,8 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-use viewcloth::scene::{self, InputError, Scene};
-use viewcloth::sim::{run, RunOptions};
+use viewcloth::scene::{self, InputError, RemeshMode, Scene};
+use viewcloth::sim::{run, RunError, RunOptions, SimError};
 
 #[derive(Parser)]
 #[command(name = "viewcloth", version, about = "Film cloth simulator: scene files in, one OBJ mesh per frame out")]
@@ -18,30 +18,37 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Simulate a scene (the built-in default shot when no SCENE is given).
-    Simulate {
-        /// Scene file (JSON).
-        scene: Option<PathBuf>,
-        /// Number of frames to simulate (overrides the scene).
-        #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
-        frames: Option<u64>,
-        /// Output directory (default: out/<scene file stem>/).
-        #[arg(long)]
-        out: Option<PathBuf>,
-        /// Worker threads (default: all cores). Results are identical for any count.
-        #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
-        threads: Option<u64>,
-        /// No progress bar.
-        #[arg(long)]
-        quiet: bool,
-        /// Also write each obstacle's world-space mesh per frame beside the cloth frames.
-        #[arg(long)]
-        export_obstacles: bool,
-    },
+    Simulate(SimulateArgs),
     /// Validate scene files and the meshes they reference, without simulating.
     Check {
         #[arg(required = true)]
         files: Vec<PathBuf>,
     },
+}
+
+#[derive(clap::Args)]
+struct SimulateArgs {
+    /// Scene file (JSON).
+    scene: Option<PathBuf>,
+    /// Number of frames to simulate (overrides the scene).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    frames: Option<u64>,
+    /// Output directory (default: out/<scene file stem>/).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Worker threads (default: all cores). Results are identical for any count.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
+    threads: Option<u64>,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+    /// Also write each obstacle's world-space mesh per frame beside the cloth frames.
+    #[arg(long)]
+    export_obstacles: bool,
+    /// Override the remeshing mode of every cloth with a `remesh` block: `adaptive`, or
+    /// `uniform` (refined once to the minimum edge length, never remeshed).
+    #[arg(long, value_parser = ["uniform", "adaptive"])]
+    mode: Option<String>,
 }
 
 /// Exit code for bad input (scene, mesh, command line).
@@ -63,27 +70,28 @@ fn load(scene: &Option<PathBuf>) -> Result<(Scene, String), InputError> {
     }
 }
 
-fn simulate(
-    scene: Option<PathBuf>,
-    frames: Option<u64>,
-    out: Option<PathBuf>,
-    threads: Option<u64>,
-    quiet: bool,
-    export_obstacles: bool,
-) -> ExitCode {
+fn simulate(args: SimulateArgs) -> ExitCode {
+    let SimulateArgs { scene, frames, out, threads, quiet, export_obstacles, mode } = args;
     if let Some(n) = threads {
         if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(n as usize).build_global() {
             eprintln!("error: --threads: cannot start {n} threads: {e}");
             return ExitCode::from(EXIT_INPUT);
         }
     }
-    let (scene, stem) = match load(&scene) {
+    let (mut scene, stem) = match load(&scene) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");
             return ExitCode::from(EXIT_INPUT);
         }
     };
+    if let Some(mode) = mode {
+        let mode = if mode == "uniform" { RemeshMode::Uniform } else { RemeshMode::Adaptive };
+        if scene.set_remesh_mode(mode) == 0 {
+            eprintln!("error: --mode: scene '{}' has no cloth with a remesh block", scene.name);
+            return ExitCode::from(EXIT_INPUT);
+        }
+    }
     let out_dir = out.unwrap_or_else(|| Path::new("out").join(&stem));
     let opts = RunOptions { out_dir: out_dir.clone(), frames: frames.map(|f| f as usize), quiet, export_obstacles };
     match run(scene, &opts) {
@@ -98,6 +106,11 @@ fn simulate(
                 );
             }
             ExitCode::SUCCESS
+        }
+        // An unusable initial state (e.g. cloth deep inside an obstacle) is bad input.
+        Err(e @ RunError::Sim(SimError::Input(_))) => {
+            eprintln!("error: {e}");
+            ExitCode::from(EXIT_INPUT)
         }
         Err(e) => {
             eprintln!("error: {e}");
@@ -124,12 +137,35 @@ fn check(files: &[PathBuf]) -> ExitCode {
     }
 }
 
-fn main() -> ExitCode {
-    let cli = Cli::parse();
-    match cli.command {
-        Command::Simulate { scene, frames, out, threads, quiet, export_obstacles } => {
-            simulate(scene, frames, out, threads, quiet, export_obstacles)
+/// Command-line errors as one line on stderr, exit code 2, like every input error; help and
+/// version print as clap formats them.
+fn parse_cli() -> Result<Cli, ExitCode> {
+    Cli::try_parse().map_err(|e| {
+        use clap::error::ErrorKind;
+        let display =
+            [ErrorKind::DisplayHelp, ErrorKind::DisplayVersion, ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand];
+        if display.contains(&e.kind()) {
+            let _ = e.print();
+            return ExitCode::from(if e.use_stderr() { EXIT_INPUT } else { 0 });
         }
+        let text = e.render().to_string();
+        let parts: Vec<&str> = text
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty() && !l.starts_with("Usage:") && !l.starts_with("For more information"))
+            .collect();
+        eprintln!("{}", parts.join(" "));
+        ExitCode::from(EXIT_INPUT)
+    })
+}
+
+fn main() -> ExitCode {
+    let cli = match parse_cli() {
+        Ok(cli) => cli,
+        Err(code) => return code,
+    };
+    match cli.command {
+        Command::Simulate(args) => simulate(args),
         Command::Check { files } => check(&files),
     }
 }

@@ -54,16 +54,20 @@ pub fn repulsion(contact: &Contact, x: &[Vec3; 4]) -> (Real, Vec12, Mat12) {
     (0.5 * k * g * g, k * g * dg, dg * dg.transpose() * k)
 }
 
-/// A node–face contact when node `p` is closer than `thickness` to face `(a, b, c)`. The normal is
-/// the direction from the closest point to `p` (the face normal when `p` lies on the face), so the
-/// initial gap is exactly distance − thickness, also when the closest point is on an edge or a
-/// vertex of the face.
+/// A node–face contact when node `p` is closer than `thickness` to face `(a, b, c)` and projects
+/// inside it (ARCSim's rule): the normal is the face normal on p's side and the initial gap is
+/// distance − thickness. A node beside the face is left to the edge–edge and neighbouring
+/// node–face tests; accepting it here would push neighbouring nodes of a flat, finely meshed
+/// sheet apart in its own plane.
 pub fn node_face_contact(nodes: [usize; 4], x: &[Vec3; 4], thickness: Real, stiffness: Real) -> Option<Contact> {
     let cl = closest_point_triangle(&x[0], &x[1], &x[2], &x[3]);
     if cl.dist >= thickness {
         return None;
     }
-    let n = if cl.dist > 0.0 && !cl.interior { (x[0] - cl.point) / cl.dist } else { cl.normal };
+    if !cl.interior {
+        return None;
+    }
+    let n = cl.normal;
     let w = [1.0, -cl.bary[0], -cl.bary[1], -cl.bary[2]];
     Some(Contact { nodes, w, n, thickness, stiffness })
 }
@@ -165,10 +169,10 @@ mod tests {
         let want = [1.0, -0.5, -0.2, -0.3];
         assert!(k.w.iter().zip(want).all(|(w, e)| (w - e).abs() < 1e-15), "{:?}", k.w);
         assert!((k.gap(&x) - (0.004 - 0.01)).abs() < 1e-15);
-        // Beside an edge: pushed away from the edge, not along the face normal.
-        let x = [v(0.5, -0.003, 0.004), a, b, c];
-        let k = node_face_contact([0, 1, 2, 3], &x, 0.01, 1.0).unwrap();
-        assert!((k.n - v(0.0, -0.6, 0.8)).norm() < 1e-12 && (k.gap(&x) + 0.005).abs() < 1e-15);
+        // Beside an edge (projecting outside the face): no node–face contact. In a flat sheet
+        // that is every node next to a face it is not on.
+        assert!(node_face_contact([0, 1, 2, 3], &[v(0.5, -0.003, 0.004), a, b, c], 0.01, 1.0).is_none());
+        assert!(node_face_contact([0, 1, 2, 3], &[v(1.001, 0.5, 0.0), v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(1.0, 1.0, 0.0)], 0.01, 1.0).is_none());
         // Farther than the thickness: no contact.
         assert!(node_face_contact([0, 1, 2, 3], &[v(0.2, 0.3, 0.02), a, b, c], 0.01, 1.0).is_none());
     }

@@ -225,6 +225,16 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Sets the remeshing mode of every cloth that has a remesh block; returns how many.
+    pub fn set_remesh_mode(&mut self, mode: RemeshMode) -> usize {
+        let mut n = 0;
+        for r in self.cloths.iter_mut().filter_map(|c| c.remesh.as_mut()) {
+            r.mode = mode;
+            n += 1;
+        }
+        n
+    }
+
     pub fn time_step(&self) -> Real {
         self.frame_time / self.steps_per_frame as Real
     }
