@@ -217,17 +217,11 @@ pub fn obstacle_obj(x: &[Vec3], triangles: &[[usize; 3]]) -> String {
     s
 }
 
-/// Reads and parses an OBJ file; the error string names the file and line.
+/// Reads and parses an OBJ file. The error says where in the file (`line N: …`) but not which
+/// file: callers put the path in their `InputError`, so it is printed once.
 pub fn read_obj(path: &Path) -> Result<ObjData, String> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
-    parse_obj(&text).map_err(|e| {
-        if e.line == 0 {
-            format!("{}: {}", path.display(), e.msg)
-        } else {
-            format!("{}: line {}: {}", path.display(), e.line, e.msg)
-        }
-    })
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read: {e}"))?;
+    parse_obj(&text).map_err(|e| if e.line == 0 { e.msg } else { format!("line {}: {}", e.line, e.msg) })
 }
 
 #[cfg(test)]
