@@ -118,12 +118,12 @@ impl ImplicitSystem {
         let blocks = &self.blocks;
         self.values
             .par_iter_mut()
-            .zip(self.csc.src.par_iter())
+            .zip(self.chol.value_sources().par_iter())
             .for_each(|(v, &s)| {
                 let b = &blocks[s / 9];
                 *v = b[((s % 9) / 3, s % 3)];
             });
-        self.chol.factor(&self.csc, &self.values)?;
+        self.chol.factor(&self.values)?;
         let t2 = std::time::Instant::now();
         let mut x: Vec<f64> = self.rhs.iter().flat_map(|r| [r.x, r.y, r.z]).collect();
         self.chol.solve(&mut x);

@@ -1,8 +1,16 @@
 //! Sparse Cholesky (faer) with the symbolic analysis kept across numeric refactorisations.
+//!
+//! faer's `factorize_numeric_llt` permutes A into the fill-reducing order on every call. The
+//! permuted pattern depends only on the symbolic analysis, so it is computed once here, with a
+//! map from each permuted entry back to the caller's CSC layout; the caller then writes the
+//! values straight into that order and the numeric kernel runs on them directly. The kernel sees
+//! the same values in the same places as through faer's own path, so the factor is bit-identical.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::sparse::linalg::cholesky::{factorize_symbolic_cholesky, LltRef, SymbolicCholesky};
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, simplicial, supernodal, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
+};
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 
@@ -19,6 +27,12 @@ pub enum SolveError {
 /// A symbolic factorisation of one sparsity pattern, refactorised numerically every step.
 pub struct Cholesky {
     symbolic: SymbolicCholesky<usize>,
+    /// P A Pᵀ in the triangle the numeric kernel reads (lower for supernodal, upper for
+    /// simplicial), columns not sorted.
+    perm_col_ptr: Vec<usize>,
+    perm_row_idx: Vec<usize>,
+    /// For each stored entry of P A Pᵀ, the `ScalarCsc::src` of the A entry it holds.
+    value_src: Vec<usize>,
     l_values: Vec<f64>,
     buffer: MemBuffer,
 }
@@ -26,51 +40,58 @@ pub struct Cholesky {
 impl Cholesky {
     /// Analyses the pattern (fill-reducing AMD ordering, elimination tree, supernodes).
     pub fn analyse(csc: &ScalarCsc) -> Result<Self, SolveError> {
-        let sym = SymbolicSparseColMatRef::new_checked(
-            csc.dim,
-            csc.dim,
-            &csc.col_ptr,
-            None,
-            &csc.row_idx,
-        );
-        let symbolic =
-            factorize_symbolic_cholesky(sym, Side::Lower, Default::default(), Default::default())
-                .map_err(|e| SolveError::Symbolic(format!("{e:?}")))?;
-        let req = symbolic
-            .factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default())
-            .or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
-        let l_values = vec![0.0; symbolic.len_val()];
-        Ok(Cholesky {
-            symbolic,
-            l_values,
-            buffer: MemBuffer::new(req),
-        })
+        let sym = SymbolicSparseColMatRef::new_checked(csc.dim, csc.dim, &csc.col_ptr, None, &csc.row_idx);
+        let symbolic = factorize_symbolic_cholesky(sym, Side::Lower, Default::default(), Default::default())
+            .map_err(|e| SolveError::Symbolic(format!("{e:?}")))?;
+        Ok(Self::with_symbolic(csc, symbolic))
     }
 
-    /// Numeric factorisation of `values` (laid out as `csc`). Sequential, so the result does not
-    /// depend on the thread count.
-    pub fn factor(&mut self, csc: &ScalarCsc, values: &[f64]) -> Result<(), SolveError> {
-        let sym = SymbolicSparseColMatRef::new_checked(
-            csc.dim,
-            csc.dim,
-            &csc.col_ptr,
-            None,
-            &csc.row_idx,
-        );
+    fn with_symbolic(csc: &ScalarCsc, symbolic: SymbolicCholesky<usize>) -> Self {
+        let (perm_col_ptr, perm_row_idx, value_src) = permuted_pattern(&symbolic, csc);
+        let factor_req = match symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(_) => {
+                simplicial::factorize_simplicial_numeric_llt_scratch::<usize, f64>(csc.dim)
+            }
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                supernodal::factorize_supernodal_numeric_llt_scratch::<usize, f64>(s, Par::Seq, Default::default())
+            }
+        };
+        let req = factor_req.or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
+        let l_values = vec![0.0; symbolic.len_val()];
+        Cholesky { symbolic, perm_col_ptr, perm_row_idx, value_src, l_values, buffer: MemBuffer::new(req) }
+    }
+
+    /// For each value the numeric factorisation takes (`factor`), the `ScalarCsc::src` of the
+    /// entry of A it must hold.
+    pub fn value_sources(&self) -> &[usize] {
+        &self.value_src
+    }
+
+    /// Numeric factorisation of the permuted values: `values[k]` is the entry of A that
+    /// `value_sources()[k]` names. Sequential, so the result does not depend on the
+    /// thread count.
+    pub fn factor(&mut self, values: &[f64]) -> Result<(), SolveError> {
+        let n = self.symbolic.nrows();
+        let sym = SymbolicSparseColMatRef::new_unsorted_checked(n, n, &self.perm_col_ptr, None, &self.perm_row_idx);
         let a = SparseColMatRef::new(sym, values);
         let stack = MemStack::new(&mut self.buffer);
-        self.symbolic
-            .factorize_numeric_llt::<f64>(
+        let reg = LltRegularization::default();
+        match self.symbolic.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                simplicial::factorize_simplicial_numeric_llt(&mut self.l_values, a, reg, s, stack)
+            }
+            SymbolicCholeskyRaw::Supernodal(s) => supernodal::factorize_supernodal_numeric_llt(
                 &mut self.l_values,
                 a,
-                Side::Lower,
-                LltRegularization::default(),
+                reg,
+                s,
                 Par::Seq,
                 stack,
                 Default::default(),
-            )
-            .map(|_| ())
-            .map_err(|e| SolveError::NotPositiveDefinite(format!("{e:?}")))
+            ),
+        }
+        .map(|_| ())
+        .map_err(|e| SolveError::NotPositiveDefinite(format!("{e:?}")))
     }
 
     /// Solves A x = rhs in place with the last factorisation.
@@ -84,5 +105,97 @@ impl Cholesky {
     /// Number of stored values in the factor (a measure of fill).
     pub fn factor_nnz(&self) -> usize {
         self.symbolic.len_val()
+    }
+}
+
+/// P A Pᵀ's pattern exactly as faer's `factorize_numeric_llt` lays it out (a counting sort
+/// over the columns of A in order, as `faer::sparse::utils::permute_self_adjoint_to_unsorted`),
+/// each entry tagged with the `src` of the A entry it takes its value from.
+fn permuted_pattern(symbolic: &SymbolicCholesky<usize>, csc: &ScalarCsc) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
+    let n = csc.dim;
+    let lower_out = matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_));
+    let identity: Vec<usize> = (0..n).collect();
+    let perm_inv = symbolic.perm().map(|p| p.arrays().1).unwrap_or(&identity);
+    // Destination (column, row) of A's lower entry (i, j) in the output triangle.
+    let dest = |i: usize, j: usize| {
+        let (pi, pj) = (perm_inv[i], perm_inv[j]);
+        if (pi >= pj) == lower_out {
+            (pj, pi)
+        } else {
+            (pi, pj)
+        }
+    };
+    let mut col_ptr = vec![0; n + 1];
+    for j in 0..n {
+        for &i in &csc.row_idx[csc.col_ptr[j]..csc.col_ptr[j + 1]] {
+            col_ptr[dest(i, j).0 + 1] += 1;
+        }
+    }
+    for j in 0..n {
+        col_ptr[j + 1] += col_ptr[j];
+    }
+    let nnz = col_ptr[n];
+    let (mut row_idx, mut src) = (vec![0; nnz], vec![0; nnz]);
+    let mut next = col_ptr[..n].to_vec();
+    for j in 0..n {
+        for k in csc.col_ptr[j]..csc.col_ptr[j + 1] {
+            let (c, r) = dest(csc.row_idx[k], j);
+            row_idx[next[c]] = r;
+            src[next[c]] = csc.src[k];
+            next[c] += 1;
+        }
+    }
+    (col_ptr, row_idx, src)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::forces::RestState;
+    use crate::mesh::rectangle;
+    use crate::solver::pattern::BlockPattern;
+    use faer::sparse::linalg::cholesky::CholeskySymbolicParams;
+    use faer::sparse::linalg::SupernodalThreshold;
+
+    /// Writing the values pre-permuted gives the factor faer's own `factorize_numeric_llt` gives,
+    /// bit for bit, on both of faer's numeric paths.
+    #[test]
+    fn prepermuted_factor_matches_faer_bitwise() {
+        let mesh = rectangle(1.0, 1.0, 9, 7).unwrap();
+        let rest = RestState::new(&mesh, |_| 0.0).unwrap();
+        let csc = ScalarCsc::new(&BlockPattern::new(&mesh, &rest.hinges, &[]));
+        // An SPD matrix with irregular values (diagonally dominant), indexed by `src` tag.
+        let mut by_src = vec![0.0; 9 * csc.row_idx.len()];
+        for j in 0..csc.dim {
+            for k in csc.col_ptr[j]..csc.col_ptr[j + 1] {
+                let t = ((k * 7919) % 101) as f64 / 97.0;
+                by_src[csc.src[k]] = if csc.row_idx[k] == j { 60.0 + t } else { -t };
+            }
+        }
+        let a: Vec<f64> = csc.src.iter().map(|&s| by_src[s]).collect();
+        let sym = SymbolicSparseColMatRef::new_checked(csc.dim, csc.dim, &csc.col_ptr, None, &csc.row_idx);
+        for threshold in [SupernodalThreshold::FORCE_SIMPLICIAL, SupernodalThreshold::FORCE_SUPERNODAL] {
+            let params = CholeskySymbolicParams { supernodal_flop_ratio_threshold: threshold, ..Default::default() };
+            let symbolic = factorize_symbolic_cholesky(sym, Side::Lower, Default::default(), params).unwrap();
+            let mut reference = vec![0.0; symbolic.len_val()];
+            let req = symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default());
+            symbolic
+                .factorize_numeric_llt::<f64>(
+                    &mut reference,
+                    SparseColMatRef::new(sym, &a),
+                    Side::Lower,
+                    LltRegularization::default(),
+                    Par::Seq,
+                    MemStack::new(&mut MemBuffer::new(req)),
+                    Default::default(),
+                )
+                .unwrap();
+            let mut chol = Cholesky::with_symbolic(&csc, symbolic);
+            let values: Vec<f64> = chol.value_sources().iter().map(|&s| by_src[s]).collect();
+            chol.factor(&values).unwrap();
+            assert!(reference.iter().any(|&x| x != 0.0));
+            let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&chol.l_values), bits(&reference), "{threshold:?}");
+        }
     }
 }

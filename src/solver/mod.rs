@@ -21,7 +21,6 @@ use pattern::{BlockPattern, ScalarCsc};
 /// The global system for one mesh topology: pattern, symbolic factorisation and buffers.
 pub struct ImplicitSystem {
     pub pattern: BlockPattern,
-    csc: ScalarCsc,
     chol: Cholesky,
     blocks: Vec<Mat3>,
     rhs: Vec<Vec3>,
@@ -38,7 +37,6 @@ impl ImplicitSystem {
         let values = vec![0.0; csc.row_idx.len()];
         Ok(ImplicitSystem {
             pattern,
-            csc,
             chol,
             blocks,
             rhs,
