@@ -19,10 +19,23 @@ struct Cli {
 enum Command {
     /// Simulate a scene (the built-in default shot when no SCENE is given).
     Simulate(SimulateArgs),
-    /// Validate scene files and the meshes they reference, without simulating.
+    /// Validate scene files (or ARCSim confs) and the files they reference, without simulating.
     Check {
         #[arg(required = true)]
         files: Vec<PathBuf>,
+        /// Base directory for an ARCSim conf's paths (default: the conf's grand-parent directory).
+        #[arg(long)]
+        base: Option<PathBuf>,
+    },
+    /// Convert an ARCSim conf into a viewcloth scene file.
+    Convert {
+        conf: PathBuf,
+        /// The scene file to write; its paths are relative to its directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Base directory for the conf's paths (default: the conf's grand-parent directory).
+        #[arg(long)]
+        base: Option<PathBuf>,
     },
 }
 
@@ -49,6 +62,9 @@ struct SimulateArgs {
     /// `uniform` (refined once to the minimum edge length, never remeshed).
     #[arg(long, value_parser = ["uniform", "adaptive"])]
     mode: Option<String>,
+    /// Base directory for an ARCSim conf's paths (default: the conf's grand-parent directory).
+    #[arg(long)]
+    base: Option<PathBuf>,
 }
 
 /// Exit code for bad input (scene, mesh, command line).
@@ -56,11 +72,20 @@ const EXIT_INPUT: u8 = 2;
 /// Exit code for a simulation or output failure.
 const EXIT_RUN: u8 = 1;
 
-fn load(scene: &Option<PathBuf>) -> Result<(Scene, String), InputError> {
+/// Loads a scene or ARCSim conf, printing the conversion's warnings (one line each).
+fn load_warn(path: &Path, base: Option<&Path>) -> Result<Scene, InputError> {
+    let loaded = scene::load_path(path, base)?;
+    for w in &loaded.warnings {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+    Ok(loaded.scene)
+}
+
+fn load(scene: &Option<PathBuf>, base: Option<&Path>) -> Result<(Scene, String), InputError> {
     match scene {
         Some(path) => {
             let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
-            Ok((scene::load_file(path)?, stem))
+            Ok((load_warn(path, base)?, stem))
         }
         None => {
             let name = scene::DEFAULT_SCENE_NAME;
@@ -71,14 +96,14 @@ fn load(scene: &Option<PathBuf>) -> Result<(Scene, String), InputError> {
 }
 
 fn simulate(args: SimulateArgs) -> ExitCode {
-    let SimulateArgs { scene, frames, out, threads, quiet, export_obstacles, mode } = args;
+    let SimulateArgs { scene, frames, out, threads, quiet, export_obstacles, mode, base } = args;
     if let Some(n) = threads {
         if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(n as usize).build_global() {
             eprintln!("error: --threads: cannot start {n} threads: {e}");
             return ExitCode::from(EXIT_INPUT);
         }
     }
-    let (mut scene, stem) = match load(&scene) {
+    let (mut scene, stem) = match load(&scene, base.as_deref()) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");
@@ -119,11 +144,11 @@ fn simulate(args: SimulateArgs) -> ExitCode {
     }
 }
 
-fn check(files: &[PathBuf]) -> ExitCode {
+fn check(files: &[PathBuf], base: Option<&Path>) -> ExitCode {
     let mut ok = true;
     for f in files {
-        match scene::check_file(f) {
-            Ok(()) => println!("{}: ok", f.display()),
+        match load_warn(f, base) {
+            Ok(_) => println!("{}: ok", f.display()),
             Err(e) => {
                 eprintln!("error: {e}");
                 ok = false;
@@ -135,6 +160,25 @@ fn check(files: &[PathBuf]) -> ExitCode {
     } else {
         ExitCode::from(EXIT_INPUT)
     }
+}
+
+fn convert(conf: &Path, out: &Path, base: Option<&Path>) -> ExitCode {
+    let (json, warnings) = match scene::arcsim::convert_file(conf, base, out) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_INPUT);
+        }
+    };
+    for w in &warnings {
+        eprintln!("warning: {}: {w}", conf.display());
+    }
+    if let Err(e) = viewcloth::io::write_atomic(out, json.as_bytes()) {
+        eprintln!("error: {}: {e}", out.display());
+        return ExitCode::from(EXIT_RUN);
+    }
+    println!("{} → {}", conf.display(), out.display());
+    ExitCode::SUCCESS
 }
 
 /// Command-line errors as one line on stderr, exit code 2, like every input error; help and
@@ -166,6 +210,7 @@ fn main() -> ExitCode {
     };
     match cli.command {
         Command::Simulate(args) => simulate(args),
-        Command::Check { files } => check(&files),
+        Command::Check { files, base } => check(&files, base.as_deref()),
+        Command::Convert { conf, out, base } => convert(&conf, &out, base.as_deref()),
     }
 }

@@ -56,6 +56,20 @@ pub fn max_principal_strain(f: &Mat3x2) -> Real {
     crate::math::eigen_sym2(&c).0[1].max(0.0).sqrt() - 1.0
 }
 
+/// J = ∂ε/∂x for ε = (E₁₁, E₂₂, 2E₁₂): one row per component, a 3-column block per node, from
+/// F and the shape-function gradients `b` (`MembraneRest::b`).
+pub fn strain_jacobian(f: &Mat3x2, b: &[Vec2; 3]) -> nalgebra::SMatrix<Real, 3, 9> {
+    let (f0, f1) = (f.column(0), f.column(1));
+    let mut jac = nalgebra::SMatrix::<Real, 3, 9>::zeros();
+    for i in 0..3 {
+        let (bi0, bi1) = (b[i].x, b[i].y);
+        jac.fixed_view_mut::<1, 3>(0, 3 * i).copy_from(&(bi0 * f0).transpose());
+        jac.fixed_view_mut::<1, 3>(1, 3 * i).copy_from(&(bi1 * f1).transpose());
+        jac.fixed_view_mut::<1, 3>(2, 3 * i).copy_from(&(bi0 * f1 + bi1 * f0).transpose());
+    }
+    jac
+}
+
 /// Energy, gradient (w.r.t. x₀, x₁, x₂ stacked) and Hessian of one membrane triangle.
 pub fn membrane(
     x: &[Vec3; 3],
@@ -75,17 +89,7 @@ pub fn membrane(
     let a = rest.area;
     let energy = a * 0.5 * (e11 * s1 + e22 * s2 + g12 * s3);
     let b = rest.b();
-    // J = ∂ε/∂x: rows (E₁₁, E₂₂, 2E₁₂), 3-column block per node.
-    let mut jac = nalgebra::SMatrix::<Real, 3, 9>::zeros();
-    for i in 0..3 {
-        let (bi0, bi1) = (b[i].x, b[i].y);
-        jac.fixed_view_mut::<1, 3>(0, 3 * i)
-            .copy_from(&(bi0 * f0).transpose());
-        jac.fixed_view_mut::<1, 3>(1, 3 * i)
-            .copy_from(&(bi1 * f1).transpose());
-        jac.fixed_view_mut::<1, 3>(2, 3 * i)
-            .copy_from(&(bi0 * f1 + bi1 * f0).transpose());
-    }
+    let jac = strain_jacobian(&f, &b);
     let sigma = Vec3::new(s1, s2, s3);
     let grad = a * jac.transpose() * sigma;
     let c = Mat3::new(k.k11, k.k12, 0.0, k.k12, k.k22, 0.0, 0.0, 0.0, k.k33);

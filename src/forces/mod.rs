@@ -2,6 +2,7 @@
 //! Scattering into the global system happens in `solver::assembly`.
 
 pub mod bending;
+pub mod data_driven;
 pub mod membrane;
 pub mod wind;
 
@@ -26,6 +27,8 @@ pub struct Hinge {
     pub edge: usize,
     pub material: usize,
     pub rest: BendingRest,
+    /// Edge direction and curvature scale, for measured (direction-dependent) bending.
+    pub measured: data_driven::HingeRest,
 }
 
 /// Rest-state data of every element, rebuilt whenever the topology changes.
@@ -48,14 +51,19 @@ impl RestState {
                 continue;
             };
             let edge = &mesh.edges[e];
-            let (Some((f0, k0)), Some((f1, _))) = (edge.adj.0[0], edge.adj.0[1]) else {
+            let (Some((f0, k0)), Some((f1, k1))) = (edge.adj.0[0], edge.adj.0[1]) else {
                 continue;
             };
             // Material-space edge length, from the first face's verts.
             let uv = mesh.face_uv(f0.idx());
             let k = k0 as usize;
-            let len2 = (uv[(k + 1) % 3] - uv[(k + 2) % 3]).norm_squared();
+            let du0 = uv[(k + 2) % 3] - uv[(k + 1) % 3];
+            let len2 = du0.norm_squared();
             let area = membrane[f0.idx()].area + membrane[f1.idx()].area;
+            // The same edge in the second face's material coordinates (they differ across a seam).
+            let uv1 = mesh.face_uv(f1.idx());
+            let k1 = k1 as usize;
+            let du1 = uv1[(k1 + 2) % 3] - uv1[(k1 + 1) % 3];
             hinges.push(Hinge {
                 nodes,
                 edge: e,
@@ -64,6 +72,7 @@ impl RestState {
                     shape: 3.0 * len2 / area,
                     theta0: rest_angle(e),
                 },
+                measured: data_driven::HingeRest::new([du0, du1], len2.sqrt(), area),
             });
         }
         Ok(RestState { membrane, hinges })

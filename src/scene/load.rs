@@ -4,8 +4,10 @@
 use std::path::{Path, PathBuf};
 
 use super::material::resolve;
-use super::motion::{Keyframe, Motion, Transform};
-use super::spec::{ClothSpec, RemeshSpec, CollisionSpec, HandleSpec, KeyframeSpec, ObstacleSpec, SceneSpec, TransformSpec};
+use super::motion::{KeyVelocity, Keyframe, Motion, Transform};
+use super::spec::{
+    ClothSpec, CollisionSpec, HandleSpec, KeyframeSpec, MotSpec, ObstacleSpec, RemeshSpec, SceneSpec, TransformSpec,
+};
 use super::{Cloth, Remesh, RemeshMode, CollisionParams, FollowObstacle, Handle, InputError, Obstacle, ObstacleShape, Scene};
 use crate::forces::wind::Wind;
 use crate::io::obj::{read_obj, ObjData};
@@ -33,16 +35,10 @@ impl Ctx<'_> {
     }
 }
 
-/// Loads and validates a scene file (and every file it references).
+/// Loads and validates a scene file (and every file it references). ARCSim confs are accepted
+/// too (paths from their default base, conversion warnings dropped; see `arcsim::load_path`).
 pub fn load_file(path: &Path) -> Res<Scene> {
-    let text = std::fs::read_to_string(path).map_err(|e| InputError {
-        file: path.to_path_buf(),
-        location: None,
-        msg: format!("cannot read scene file: {e}"),
-    })?;
-    let base = path.parent().unwrap_or(Path::new("."));
-    let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-    load_str(&text, path, base, &stem)
+    super::arcsim::load_path(path, None).map(|loaded| loaded.scene)
 }
 
 /// Validates a scene file without keeping the result.
@@ -67,6 +63,16 @@ pub fn load_str(text: &str, file: &Path, base: &Path, default_name: &str) -> Res
             path
         };
         ctx.err(loc, inner.to_string())
+    })?;
+    build(&ctx, spec, default_name)
+}
+
+/// Like `load_str`, from an already parsed JSON value (ARCSim confs arrive converted).
+pub fn load_value(value: serde_json::Value, file: &Path, base: &Path, default_name: &str) -> Res<Scene> {
+    let ctx = Ctx { file, base };
+    let spec: SceneSpec = serde_path_to_error::deserialize(value).map_err(|e| {
+        let path = e.path().to_string();
+        ctx.err(if path == "." { "JSON".to_string() } else { path }, e.inner().to_string())
     })?;
     build(&ctx, spec, default_name)
 }
@@ -264,6 +270,7 @@ fn motion(ctx: &Ctx, path: &str, keys: &[KeyframeSpec]) -> Res<Motion> {
         return Err(ctx.err(path, "expected at least one keyframe"));
     }
     let mut out = Vec::with_capacity(keys.len());
+    let mut velocities = Vec::with_capacity(keys.len());
     for (i, k) in keys.iter().enumerate() {
         let p = format!("{path}[{i}]");
         if !k.time.is_finite() {
@@ -278,8 +285,42 @@ fn motion(ctx: &Ctx, path: &str, keys: &[KeyframeSpec]) -> Res<Motion> {
         }
         let t = TransformSpec { translate: k.translate, rotate: k.rotate, scale: k.scale };
         out.push(Keyframe { time: k.time, transform: transform(ctx, &p, &t)? });
+        let velocity = match &k.velocity {
+            Some(v) => {
+                let translate = finite3(ctx, &format!("{p}.velocity.translate"), v.translate)?;
+                if !v.scale.is_finite() {
+                    return Err(ctx.err(format!("{p}.velocity.scale"), "expected a finite number"));
+                }
+                Some(KeyVelocity { translate, scale: v.scale })
+            }
+            None => None,
+        };
+        velocities.push(velocity);
     }
-    Ok(Motion::new(out))
+    Ok(Motion::with_velocities(out, velocities))
+}
+
+/// The motion of a handle or obstacle at `path`: keyframes, a `.mot` body, or none.
+fn motion_or_mot(ctx: &Ctx, path: &str, keys: Option<&[KeyframeSpec]>, mot: Option<&MotSpec>) -> Res<Option<Motion>> {
+    match (keys, mot) {
+        (Some(_), Some(_)) => Err(ctx.err(format!("{path}.mot"), "give motion or mot, not both")),
+        (Some(k), None) => motion(ctx, &format!("{path}.motion"), k).map(Some),
+        (None, Some(m)) => {
+            let mp = format!("{path}.mot");
+            let fps = positive(ctx, &format!("{mp}.fps"), m.fps)?;
+            if !m.start_time.is_finite() {
+                return Err(ctx.err(format!("{mp}.start_time"), "expected a finite time"));
+            }
+            let xf = transform(ctx, &format!("{mp}.transform"), &m.transform)?;
+            let file = super::mot::read_mot(&ctx.resolve(&m.file))?;
+            if m.body < 0 || m.body as usize >= file.bodies.len() {
+                let msg = format!("expected a body index in 0..{}, got {}", file.bodies.len(), m.body);
+                return Err(ctx.err(format!("{mp}.body"), msg));
+            }
+            Ok(Some(file.body_motion(m.body as usize, fps, m.start_time, &xf)))
+        }
+        (None, None) => Ok(None),
+    }
 }
 
 /// The path of a mesh file named by the scene field `field`; a missing file is that field's error.
@@ -318,8 +359,22 @@ fn cloth_mesh(ctx: &Ctx, path: &str, cs: &ClothSpec) -> Res<Mesh> {
 fn add_cloth(ctx: &Ctx, scene: &mut Scene, c: usize, cs: &ClothSpec) -> Res<()> {
     let path = format!("cloths[{c}]");
     positive(ctx, &format!("{path}.uv_scale"), cs.uv_scale)?;
-    let material = resolve(&cs.material)
-        .map_err(|(field, msg)| ctx.err(format!("{path}.material.{field}"), format!("expected {msg}")))?;
+    let material = match &cs.material.arcsim {
+        Some(file) => {
+            let data = super::measured::read_measured(&ctx.resolve(file))?;
+            super::measured::resolve_measured(&cs.material, &data)
+        }
+        None => resolve(&cs.material),
+    }
+    .map_err(|(field, msg)| ctx.err(format!("{path}.material.{field}"), format!("expected {msg}")))?;
+    let flat_rest = match cs.rest_angles.as_deref() {
+        None | Some("input") => false,
+        Some("flat") => true,
+        Some(other) => {
+            let msg = format!("expected \"input\" or \"flat\", got \"{other}\"");
+            return Err(ctx.err(format!("{path}.rest_angles"), msg));
+        }
+    };
     let xf = transform(ctx, &format!("{path}.transform"), &cs.transform)?;
     let velocity = finite3(ctx, &format!("{path}.velocity"), cs.velocity)?;
     let mut local = cloth_mesh(ctx, &path, cs)?;
@@ -342,10 +397,10 @@ fn add_cloth(ctx: &Ctx, scene: &mut Scene, c: usize, cs: &ClothSpec) -> Res<()> 
         let hp = format!("{path}.handles[{h}]");
         let nodes = handle_nodes(ctx, &hp, hs, &local)?;
         let anchors = nodes.iter().map(|&n| scene.mesh.nodes[n + node0].x).collect();
-        let motion = hs.motion.as_ref().map(|m| motion(ctx, &format!("{hp}.motion"), m)).transpose()?;
+        let motion = motion_or_mot(ctx, &hp, hs.motion.as_deref(), hs.mot.as_ref())?;
         let follow = match &hs.obstacle {
-            Some(_) if hs.motion.is_some() => {
-                return Err(ctx.err(format!("{hp}.obstacle"), "give motion or obstacle, not both"))
+            Some(_) if motion.is_some() => {
+                return Err(ctx.err(format!("{hp}.obstacle"), "give motion (or mot) or obstacle, not both"))
             }
             Some(name) => Some(follow_obstacle(ctx, &format!("{hp}.obstacle"), name, &scene.obstacles)?),
             None => None,
@@ -367,7 +422,7 @@ fn add_cloth(ctx: &Ctx, scene: &mut Scene, c: usize, cs: &ClothSpec) -> Res<()> 
         });
     }
     let remesh = cs.remesh.as_ref().map(|r| remesh_params(ctx, &format!("{path}.remesh"), r)).transpose()?;
-    scene.cloths.push(Cloth { name, material: scene.materials.len(), remesh });
+    scene.cloths.push(Cloth { name, material: scene.materials.len(), remesh, flat_rest });
     scene.materials.push(material);
     Ok(())
 }
@@ -620,7 +675,7 @@ fn load_obstacle(ctx: &Ctx, o: usize, os: &ObstacleSpec) -> Res<Obstacle> {
         name: os.name.clone().unwrap_or_else(|| format!("obstacle{o}")),
         shape,
         transform: transform(ctx, &format!("{path}.transform"), &os.transform)?,
-        motion: os.motion.as_ref().map(|m| motion(ctx, &format!("{path}.motion"), m)).transpose()?,
+        motion: motion_or_mot(ctx, &path, os.motion.as_deref(), os.mot.as_ref())?,
     })
 }
 
@@ -669,7 +724,7 @@ fn load_sequence(ctx: &Ctx, path: &str, seq: &super::spec::SequenceSpec) -> Res<
 }
 
 /// Substitutes the frame number for the one printf-style `%d` / `%0Nd` in `pattern`.
-fn format_frame(pattern: &str, n: i64) -> Result<String, String> {
+pub(super) fn format_frame(pattern: &str, n: i64) -> Result<String, String> {
     let bad = || format!("expected one %d or %0Nd (e.g. \"body_%04d.obj\") in \"{pattern}\"");
     let start = pattern.find('%').ok_or_else(bad)?;
     let rest = &pattern[start + 1..];

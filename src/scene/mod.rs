@@ -1,12 +1,17 @@
 //! Scenes: the file format (`spec`), its validation and assembly into a runnable `Scene`
 //! (`load`), fabrics (`material`) and keyframed motion (`motion`).
 
+pub mod arcsim;
 mod load;
 pub mod material;
+mod measured;
+pub mod mot;
 pub mod motion;
 pub mod spec;
 
-pub use load::{check_file, load_file, load_str, DEFAULT_SCENE, DEFAULT_SCENE_NAME};
+pub use arcsim::{load_path, Loaded};
+pub use load::{check_file, load_file, load_str, load_value, DEFAULT_SCENE, DEFAULT_SCENE_NAME};
+pub use measured::read_measured;
 
 use std::path::PathBuf;
 
@@ -46,6 +51,8 @@ pub struct Cloth {
     pub material: usize,
     /// Remeshing of this cloth; `None` keeps its input mesh.
     pub remesh: Option<Remesh>,
+    /// Rest dihedral angles are zero (ARCSim) instead of the input mesh's.
+    pub flat_rest: bool,
 }
 
 /// Whether a cloth's mesh adapts every few frames or is refined once.
@@ -237,5 +244,17 @@ impl Scene {
 
     pub fn time_step(&self) -> Real {
         self.frame_time / self.steps_per_frame as Real
+    }
+
+    /// Rest dihedral angle of every edge of `mesh`: its current angle, or zero on cloths that
+    /// rest flat.
+    pub fn rest_angles(&self, mesh: &Mesh) -> Vec<Real> {
+        let mut angles = crate::forces::edge_angles(mesh);
+        for (a, e) in angles.iter_mut().zip(&mesh.edges) {
+            if self.cloths.get(mesh.nodes[e.n[0].idx()].cloth as usize).is_some_and(|c| c.flat_rest) {
+                *a = 0.0;
+            }
+        }
+        angles
     }
 }

@@ -71,12 +71,22 @@ pub struct Keyframe {
     pub transform: Transform,
 }
 
+/// An explicit tangent at a key (ARCSim's keyframe `velocity`): translation and scale rates;
+/// the rotation's tangent is then zero.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KeyVelocity {
+    pub translate: Vec3,
+    pub scale: Real,
+}
+
 /// A keyframed motion; keys are strictly increasing in time (checked at load).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Motion {
     keys: Vec<Keyframe>,
     /// Quaternion coefficients per key, sign-aligned with the previous key.
     quats: Vec<nalgebra::Vector4<Real>>,
+    /// Explicit tangents, per key (empty: all central differences).
+    velocities: Vec<Option<KeyVelocity>>,
 }
 
 impl Motion {
@@ -91,7 +101,12 @@ impl Motion {
             }
             quats.push(q);
         }
-        Motion { keys, quats }
+        Motion { keys, quats, velocities: Vec::new() }
+    }
+
+    /// A motion whose keys may carry explicit tangents (`velocities[i]` for key i).
+    pub fn with_velocities(keys: Vec<Keyframe>, velocities: Vec<Option<KeyVelocity>>) -> Self {
+        Motion { velocities, ..Motion::new(keys) }
     }
 
     pub fn keys(&self) -> &[Keyframe] {
@@ -122,8 +137,16 @@ impl Motion {
             -2.0 * s.powi(3) + 3.0 * s * s,
             s.powi(3) - s * s,
         );
+        let given = |j: usize| self.velocities.get(j).copied().flatten();
         let tangent = |j: usize, get: &dyn Fn(usize) -> nalgebra::DVector<Real>| {
-            if j == 0 || j == n - 1 {
+            if let Some(v) = given(j) {
+                // Which component `get` reads follows from its length (3, 1 or 4).
+                match get(j).len() {
+                    3 => nalgebra::DVector::from_column_slice(v.translate.as_slice()),
+                    1 => nalgebra::DVector::from_element(1, v.scale),
+                    len => nalgebra::DVector::zeros(len),
+                }
+            } else if j == 0 || j == n - 1 {
                 get(j) * 0.0
             } else {
                 (get(j + 1) - get(j - 1)) / (k[j + 1].time - k[j - 1].time)

@@ -112,6 +112,9 @@ pub struct ClothSpec {
     /// Adaptive remeshing; absent = the input mesh is kept.
     #[serde(default)]
     pub remesh: Option<RemeshSpec>,
+    /// Rest dihedral angles: `input` (default, the input mesh's shape) or `flat` (ARCSim).
+    #[serde(default)]
+    pub rest_angles: Option<String>,
 }
 
 /// Remeshing of one cloth (Narain et al. 2012). A missing criterion is off.
@@ -210,6 +213,16 @@ pub struct MaterialSpec {
     /// Multiplies the bending stiffness.
     #[serde(default)]
     pub bending_mult: Option<f64>,
+    /// A measured fabric file (Wang et al. 2011 / ARCSim `materials/*.json`), relative to the
+    /// scene file; exclusive with the preset and stiffness fields.
+    #[serde(default)]
+    pub arcsim: Option<String>,
+    /// With `arcsim`: multiplies the file's density.
+    #[serde(default)]
+    pub density_mult: Option<f64>,
+    /// With `arcsim`: multiplies density, stretching and bending together (ARCSim).
+    #[serde(default)]
+    pub thicken: Option<f64>,
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -225,6 +238,9 @@ pub struct HandleSpec {
     /// Keyframed rigid motion applied to the handle's initial positions.
     #[serde(default)]
     pub motion: Option<Vec<KeyframeSpec>>,
+    /// Motion of one body of a `.mot` file; exclusive with `motion` and `obstacle`.
+    #[serde(default)]
+    pub mot: Option<MotSpec>,
     /// Name of a (rigid) obstacle the handle rides on; exclusive with `motion`.
     #[serde(default)]
     pub obstacle: Option<String>,
@@ -253,6 +269,35 @@ pub struct KeyframeSpec {
     pub rotate: Option<[f64; 4]>,
     #[serde(default = "one")]
     pub scale: f64,
+    /// Explicit tangent at this key (ARCSim's keyframe `velocity`); absent = central difference.
+    #[serde(default)]
+    pub velocity: Option<KeyVelocitySpec>,
+}
+
+/// Rates of change at a keyframe: translation (m/s) and scale (1/s); the rotation's rate is zero.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct KeyVelocitySpec {
+    #[serde(default)]
+    pub translate: [f64; 3],
+    #[serde(default)]
+    pub scale: f64,
+}
+
+/// One body of a `.mot` motion file (ARCSim's character motions): its per-frame rigid transforms,
+/// frame k at time k / fps − start_time, each followed by `transform`, splined like keyframes.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct MotSpec {
+    /// The `.mot` file, relative to the scene file.
+    pub file: String,
+    /// Body index (0-based).
+    pub body: i64,
+    pub fps: f64,
+    #[serde(default)]
+    pub start_time: f64,
+    #[serde(default)]
+    pub transform: TransformSpec,
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -278,6 +323,9 @@ pub struct ObstacleSpec {
     pub transform: TransformSpec,
     #[serde(default)]
     pub motion: Option<Vec<KeyframeSpec>>,
+    /// Motion from a `.mot` file instead of keyframes.
+    #[serde(default)]
+    pub mot: Option<MotSpec>,
 }
 
 #[derive(Deserialize, Debug, Clone)]

@@ -12,7 +12,7 @@ use crate::collision::obstacle::ObstacleBody;
 use crate::collision::sdf::MeshSdf;
 use crate::collision::world::{CollisionCounters, CollisionWorld};
 use crate::forces::membrane::{deformation_gradient, max_principal_strain};
-use crate::forces::{edge_angles, RestState};
+use crate::forces::RestState;
 use crate::io::stats::FrameStats;
 use crate::math::Real;
 use crate::mesh::Mesh;
@@ -62,7 +62,7 @@ pub struct Simulation {
 impl Simulation {
     pub fn new(mut scene: Scene) -> Result<Self, SimError> {
         let mesh = std::mem::take(&mut scene.mesh);
-        let rest_angles = edge_angles(&mesh);
+        let rest_angles = scene.rest_angles(&mesh);
         let rest = RestState::new(&mesh, |e| rest_angles[e])
             .map_err(|f| SimError::Mesh(format!("face {f} is degenerate in material space")))?;
         let system = ImplicitSystem::new(BlockPattern::new(&mesh, &rest.hinges, &[]))
@@ -141,19 +141,17 @@ impl Simulation {
 
     /// Elastic energy (membrane + bending) of the current state.
     pub fn elastic_energy(&self) -> Real {
-        use crate::forces::bending::bending;
-        use crate::forces::membrane::membrane;
         use crate::forces::Projection;
         let m = &self.mesh;
         let mut e = 0.0;
         for f in 0..m.faces.len() {
             let x = m.face_nodes(f).map(|n| m.nodes[n].x);
             let mat = &self.scene.materials[m.faces[f].material as usize];
-            e += membrane(&x, &self.rest.membrane[f], &mat.membrane, Projection::Psd).0;
+            e += mat.stretch(&x, &self.rest.membrane[f], Projection::Psd).0;
         }
         for hg in &self.rest.hinges {
             let x = hg.nodes.map(|n| m.nodes[n].x);
-            e += bending(&x, &hg.rest, self.scene.materials[hg.material].bending, Projection::Psd).0;
+            e += self.scene.materials[hg.material].bend(&x, hg, Projection::Psd).0;
         }
         e
     }

@@ -6,8 +6,6 @@
 use rayon::prelude::*;
 
 use crate::collision::proximity::{repulsion, Contact};
-use crate::forces::bending::bending;
-use crate::forces::membrane::membrane;
 use crate::forces::wind::{wind_face, Wind};
 use crate::forces::{Projection, RestState};
 use crate::math::{Mat12, Mat3, Real, Vec12, Vec3, Vec9};
@@ -59,7 +57,7 @@ fn face_local(inp: &StepInput, f: usize) -> Local<3, 9> {
     let v = ids.map(|n| mesh.nodes[n].v);
     let m = &inp.materials[mesh.faces[f].material as usize];
     let h = inp.h;
-    let (energy, grad, hess) = membrane(&x, &inp.rest.membrane[f], &m.membrane, Projection::Psd);
+    let (energy, grad, hess) = m.stretch(&x, &inp.rest.membrane[f], Projection::Psd);
     let vl = Vec9::from_fn(|r, _| v[r / 3][r % 3]);
     // b = h(f − (α + h) K v), A = (hα + h²) K.
     let mut rhs = -h * grad - h * (m.damping + h) * (hess * vl);
@@ -84,7 +82,7 @@ fn hinge_local(inp: &StepInput, k: usize) -> Local<4, 12> {
     let x = hinge.nodes.map(|n| inp.mesh.nodes[n].x);
     let m = &inp.materials[hinge.material];
     let h = inp.h;
-    let (energy, grad, hess) = bending(&x, &hinge.rest, m.bending, Projection::Psd);
+    let (energy, grad, hess) = m.bend(&x, hinge, Projection::Psd);
     let vl = Vec12::from_fn(|r, _| inp.mesh.nodes[hinge.nodes[r / 3]].v[r % 3]);
     let rhs = -h * grad - h * (m.damping + h) * (hess * vl);
     let mat: Mat12 = (h * m.damping + h * h) * hess;
