@@ -6,7 +6,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 use viewcloth::scene::{self, InputError, RemeshMode, Scene};
-use viewcloth::sim::{run, RunError, RunOptions, SimError};
+use viewcloth::sim::{resume, run_with_checkpoints, CheckpointOptions, ResumeOptions, RunError, RunOptions, SimError};
 
 #[derive(Parser)]
 #[command(name = "viewcloth", version, about = "Film cloth simulator: scene files in, one OBJ mesh per frame out")]
@@ -19,6 +19,9 @@ struct Cli {
 enum Command {
     /// Simulate a scene (the built-in default shot when no SCENE is given).
     Simulate(SimulateArgs),
+    /// Continue a run from the last checkpoint in its output directory (the frames are
+    /// identical to an uninterrupted run's).
+    Resume(ResumeArgs),
     /// Validate scene files (or ARCSim confs) and the files they reference, without simulating.
     Check {
         #[arg(required = true)]
@@ -62,9 +65,27 @@ struct SimulateArgs {
     /// `uniform` (refined once to the minimum edge length, never remeshed).
     #[arg(long, value_parser = ["uniform", "adaptive"])]
     mode: Option<String>,
+    /// Write a checkpoint every N frames (and at the last), for `viewcloth resume`.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    checkpoint_every: Option<u64>,
     /// Base directory for an ARCSim conf's paths (default: the conf's grand-parent directory).
     #[arg(long)]
     base: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+struct ResumeArgs {
+    /// Output directory of a run started with --checkpoint-every.
+    dir: PathBuf,
+    /// Last frame of the continued run (default: the run's own).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    frames: Option<u64>,
+    /// Worker threads (default: all cores). Results are identical for any count.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
+    threads: Option<u64>,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
 }
 
 /// Exit code for bad input (scene, mesh, command line).
@@ -95,14 +116,42 @@ fn load(scene: &Option<PathBuf>, base: Option<&Path>) -> Result<(Scene, String),
     }
 }
 
-fn simulate(args: SimulateArgs) -> ExitCode {
-    let SimulateArgs { scene, frames, out, threads, quiet, export_obstacles, mode, base } = args;
+/// Sets the worker thread count; false (after printing the error) when it cannot.
+fn set_threads(threads: Option<u64>) -> bool {
     if let Some(n) = threads {
         if let Err(e) = rayon::ThreadPoolBuilder::new().num_threads(n as usize).build_global() {
             eprintln!("error: --threads: cannot start {n} threads: {e}");
-            return ExitCode::from(EXIT_INPUT);
+            return false;
         }
     }
+    true
+}
+
+/// Exit code and one stderr line for a failed run: bad input (including an unusable initial
+/// state or checkpoint) is 2, a simulation or output failure 1.
+fn run_failed(e: RunError) -> ExitCode {
+    eprintln!("error: {e}");
+    match e {
+        RunError::Sim(SimError::Input(_)) | RunError::Input(_) | RunError::Checkpoint(_) => ExitCode::from(EXIT_INPUT),
+        _ => ExitCode::from(EXIT_RUN),
+    }
+}
+
+fn simulate(args: SimulateArgs) -> ExitCode {
+    let SimulateArgs { scene, frames, out, threads, quiet, export_obstacles, mode, checkpoint_every, base } = args;
+    if !set_threads(threads) {
+        return ExitCode::from(EXIT_INPUT);
+    }
+    let scene_file = match &scene {
+        Some(p) => match std::path::absolute(p) {
+            Ok(abs) => Some(abs),
+            Err(e) => {
+                eprintln!("error: {}: {e}", p.display());
+                return ExitCode::from(EXIT_INPUT);
+            }
+        },
+        None => None,
+    };
     let (mut scene, stem) = match load(&scene, base.as_deref()) {
         Ok(s) => s,
         Err(e) => {
@@ -110,8 +159,8 @@ fn simulate(args: SimulateArgs) -> ExitCode {
             return ExitCode::from(EXIT_INPUT);
         }
     };
+    let mode = mode.map(|m| if m == "uniform" { RemeshMode::Uniform } else { RemeshMode::Adaptive });
     if let Some(mode) = mode {
-        let mode = if mode == "uniform" { RemeshMode::Uniform } else { RemeshMode::Adaptive };
         if scene.set_remesh_mode(mode) == 0 {
             eprintln!("error: --mode: scene '{}' has no cloth with a remesh block", scene.name);
             return ExitCode::from(EXIT_INPUT);
@@ -119,7 +168,8 @@ fn simulate(args: SimulateArgs) -> ExitCode {
     }
     let out_dir = out.unwrap_or_else(|| Path::new("out").join(&stem));
     let opts = RunOptions { out_dir: out_dir.clone(), frames: frames.map(|f| f as usize), quiet, export_obstacles };
-    match run(scene, &opts) {
+    let ck = checkpoint_every.map(|every| CheckpointOptions { every: every as usize, scene_file, mode });
+    match run_with_checkpoints(scene, &opts, ck.as_ref()) {
         Ok(stats) => {
             if !quiet {
                 println!(
@@ -132,15 +182,29 @@ fn simulate(args: SimulateArgs) -> ExitCode {
             }
             ExitCode::SUCCESS
         }
-        // An unusable initial state (e.g. cloth deep inside an obstacle) is bad input.
-        Err(e @ RunError::Sim(SimError::Input(_))) => {
-            eprintln!("error: {e}");
-            ExitCode::from(EXIT_INPUT)
+        Err(e) => run_failed(e),
+    }
+}
+
+fn resume_run(args: ResumeArgs) -> ExitCode {
+    if !set_threads(args.threads) {
+        return ExitCode::from(EXIT_INPUT);
+    }
+    let opts = ResumeOptions { frames: args.frames.map(|f| f as usize), quiet: args.quiet };
+    match resume(&args.dir, &opts) {
+        Ok(stats) => {
+            if !args.quiet {
+                let resumed = stats.resumed_at.last().copied().unwrap_or(0);
+                println!(
+                    "{}: resumed at frame {resumed}, {} frames in all → {}",
+                    stats.scene,
+                    stats.frames.len().saturating_sub(1),
+                    args.dir.display()
+                );
+            }
+            ExitCode::SUCCESS
         }
-        Err(e) => {
-            eprintln!("error: {e}");
-            ExitCode::from(EXIT_RUN)
-        }
+        Err(e) => run_failed(e),
     }
 }
 
@@ -210,6 +274,7 @@ fn main() -> ExitCode {
     };
     match cli.command {
         Command::Simulate(args) => simulate(args),
+        Command::Resume(args) => resume_run(args),
         Command::Check { files, base } => check(&files, base.as_deref()),
         Command::Convert { conf, out, base } => convert(&conf, &out, base.as_deref()),
     }

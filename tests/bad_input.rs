@@ -59,6 +59,9 @@ fn grid_obj(extra: &str) -> String {
     s + extra
 }
 
+/// A valid remesh block (for the out-of-range cases that edit it).
+const REMESH: &str = r#""remesh": { "mode": "adaptive", "refine_angle": 0.3, "size": [0.01, 0.2], "aspect_min": 0.2 }"#;
+
 /// Where the message must point: a JSON path, `line N`, or nowhere more precise than the file.
 enum Loc {
     Field(&'static str),
@@ -237,6 +240,66 @@ fn cases() -> Vec<Case> {
             Loc::FileOnly,
             "no faces",
         ),
+        // Issue 5: out-of-range values.
+        json(
+            "aspect_min_zero",
+            rect.replace("\"material\"", &format!("{REMESH},\n      \"material\"")).replace("\"aspect_min\": 0.2", "\"aspect_min\": 0"),
+            Loc::Field("cloths[0].remesh.aspect_min"),
+            "(0, 1]",
+        ),
+        json(
+            "aspect_min_above_one",
+            rect.replace("\"material\"", &format!("{REMESH},\n      \"material\"")).replace("\"aspect_min\": 0.2", "\"aspect_min\": 1.5"),
+            Loc::Field("cloths[0].remesh.aspect_min"),
+            "(0, 1]",
+        ),
+        json(
+            "size_min_above_max",
+            rect.replace("\"material\"", &format!("{REMESH},\n      \"material\"")).replace("[0.01, 0.2]", "[0.2, 0.01]"),
+            Loc::Field("cloths[0].remesh.size"),
+            "min ≤ max",
+        ),
+        json("time_step_zero", rect.replace("\"steps_per_frame\": 2", "\"time_step\": 0"), Loc::Field("time_step"), "positive"),
+        json(
+            "time_step_negative",
+            rect.replace("\"steps_per_frame\": 2", "\"time_step\": -0.01"),
+            Loc::Field("time_step"),
+            "positive",
+        ),
+        json(
+            "steps_per_frame_zero",
+            rect.replace("\"steps_per_frame\": 2", "\"steps_per_frame\": 0"),
+            Loc::Field("steps_per_frame"),
+            "1..=100000",
+        ),
+        json("frame_time_zero", rect.replace("\"frame_time\": 0.04", "\"frame_time\": 0"), Loc::Field("frame_time"), "positive"),
+        json(
+            "zero_density",
+            rect.replace("\"preset\": \"cotton\"", "\"density\": 0"),
+            Loc::Field("cloths[0].material.density"),
+            "positive",
+        ),
+        json(
+            "zero_stiffness",
+            rect.replace("\"preset\": \"cotton\"", "\"warp\": 0"),
+            Loc::Field("cloths[0].material.warp"),
+            "positive",
+        ),
+        json(
+            "negative_stiffness",
+            rect.replace("\"preset\": \"cotton\"", "\"youngs_modulus\": -1e6, \"thickness\": 0.001"),
+            Loc::Field("cloths[0].material.youngs_modulus"),
+            "positive",
+        ),
+        Case {
+            name: "cli_checkpoint_every_zero",
+            files: vec![("scene.json", rect.clone())],
+            scene: "scene.json",
+            args: &["--checkpoint-every", "0"],
+            file: "",
+            loc: Loc::FileOnly,
+            mentions: "--checkpoint-every",
+        },
         Case {
             name: "cli_frames_zero",
             files: vec![("scene.json", rect.clone())],

@@ -132,12 +132,16 @@ impl BroadPhase {
     }
 }
 
-/// Runs `query(i, &mut found)` for each `i` in parallel and concatenates in index order.
+/// Runs `query(i, &mut found)` for each `i` in parallel and concatenates in index order. Each
+/// query's results are sorted: the order a tree finds them in depends on the tree's shape,
+/// hence on the positions it was built at, and a resumed run rebuilds its trees elsewhere.
 fn collect(range: std::ops::Range<usize>, query: impl Fn(usize, &mut Vec<Candidate>) + Sync) -> Vec<Candidate> {
     range
         .into_par_iter()
         .fold(Vec::new, |mut v, i| {
+            let start = v.len();
             query(i, &mut v);
+            v[start..].sort_unstable();
             v
         })
         .reduce(Vec::new, |mut a, mut b| {

@@ -23,6 +23,16 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     result
 }
 
+/// Whether a file name is a temporary of `write_atomic` (`.<name>.tmp<pid>`), left behind
+/// only by a process killed mid-write.
+pub fn is_temp_name(name: &str) -> bool {
+    name.starts_with('.')
+        && name.rfind(".tmp").is_some_and(|k| {
+            let pid = &name[k + 4..];
+            !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit())
+        })
+}
+
 fn temp_name(path: &Path) -> PathBuf {
     let name = path
         .file_name()

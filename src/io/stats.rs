@@ -2,9 +2,9 @@
 
 use std::collections::BTreeMap;
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
-#[derive(Serialize, Debug, Clone, Default)]
+#[derive(Serialize, Deserialize, Debug, Clone, Default)]
 pub struct FrameStats {
     pub frame: usize,
     pub time: f64,
@@ -17,7 +17,17 @@ pub struct FrameStats {
     pub total_energy: f64,
     pub max_strain: f64,
     pub mean_strain: f64,
+    /// Steps taken (more than the scene's steps per frame when steps were retried).
     pub steps: usize,
+    /// Attempted steps rolled back and retried at half the size (`sim::recover`).
+    #[serde(default)]
+    pub retries: usize,
+    /// Smallest step taken in the frame (s); 0 for frame 0.
+    #[serde(default)]
+    pub min_step: f64,
+    /// Retries by fault kind (absent when none).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub faults: BTreeMap<String, usize>,
     /// Present when the collision stages ran.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub collision: Option<CollisionFrameStats>,
@@ -27,7 +37,7 @@ pub struct FrameStats {
 }
 
 /// Remeshing work done at the start of a frame.
-#[derive(Serialize, Debug, Clone, Default, PartialEq)]
+#[derive(Serialize, Deserialize, Debug, Clone, Default, PartialEq)]
 pub struct RemeshFrameStats {
     pub splits: usize,
     pub flips: usize,
@@ -35,7 +45,7 @@ pub struct RemeshFrameStats {
 }
 
 /// Collision counters of one frame (summed over its steps).
-#[derive(Serialize, Debug, Clone, Default, PartialEq)]
+#[derive(Serialize, Deserialize, Debug, Clone, Default, PartialEq)]
 pub struct CollisionFrameStats {
     /// Repulsion contacts in the implicit solves.
     pub contacts: usize,
@@ -51,11 +61,22 @@ pub struct CollisionFrameStats {
     pub penetrations: usize,
 }
 
-#[derive(Serialize, Debug, Clone, Default)]
+#[derive(Serialize, Deserialize, Debug, Clone, Default)]
 pub struct RunStats {
     pub scene: String,
     pub mode: String,
     pub stages: Vec<String>,
     pub total_wall_s: f64,
+    /// Retried steps over the run, and the smallest step taken (s).
+    #[serde(default)]
+    pub retries: usize,
+    #[serde(default)]
+    pub min_step: f64,
+    /// Frames from which the run was resumed (`viewcloth resume`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub resumed_at: Vec<usize>,
+    /// Why the run stopped early, when it did.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
     pub frames: Vec<FrameStats>,
 }

@@ -2,11 +2,13 @@
 //! measurements.
 
 mod adapt;
+pub mod checkpoint;
+pub mod recover;
 mod run;
 mod step;
 pub mod timers;
 
-pub use run::{run, RunError, RunOptions};
+pub use run::{resume, run, run_with_checkpoints, CheckpointOptions, ResumeOptions, RunError, RunOptions};
 
 use crate::collision::obstacle::ObstacleBody;
 use crate::collision::sdf::MeshSdf;
@@ -25,8 +27,9 @@ use timers::StageTimers;
 pub enum SimError {
     #[error("step {step} (t = {time:.6} s): {source}")]
     Solve { step: u64, time: Real, source: SolveError },
-    #[error("step {step} (t = {time:.6} s): the state became non-finite (NaN or infinity)")]
-    NonFinite { step: u64, time: Real },
+    /// A step that failed its fault checks at every step size down to `h` (`recover`).
+    #[error("step {step} (t = {time:.6} s): {fault}, still at h = {h:.3e} s after {halvings} halvings of the step")]
+    StepFailed { step: u64, time: Real, h: Real, halvings: u32, fault: String },
     #[error("invalid mesh: {0}")]
     Mesh(String),
     /// The initial state is not usable (e.g. cloth deep inside an obstacle).
@@ -57,6 +60,16 @@ pub struct Simulation {
     pub frame: usize,
     /// Remeshing work since last taken (for stats).
     pub remesh_stats: crate::remesh::RemeshStats,
+    /// Accepted steps and rolled-back attempts since last taken (for stats).
+    pub faults: recover::FaultStats,
+}
+
+/// The collision stages' world, when the scene has obstacles or self-collision.
+fn collision_world(scene: &Scene, t: Real) -> Option<CollisionWorld> {
+    (!scene.obstacles.is_empty() || scene.collision.self_collision).then(|| {
+        let bodies = scene.obstacles.iter().map(ObstacleBody::new).collect();
+        CollisionWorld::new(scene.collision.clone(), bodies, t)
+    })
 }
 
 impl Simulation {
@@ -68,10 +81,7 @@ impl Simulation {
         let system = ImplicitSystem::new(BlockPattern::new(&mesh, &rest.hinges, &[]))
             .map_err(|source| SimError::Solve { step: 0, time: 0.0, source })?;
         let node_area = adapt::node_areas(&mesh, &rest);
-        let collisions = (!scene.obstacles.is_empty() || scene.collision.self_collision).then(|| {
-            let bodies = scene.obstacles.iter().map(ObstacleBody::new).collect();
-            CollisionWorld::new(scene.collision.clone(), bodies, 0.0)
-        });
+        let collisions = collision_world(&scene, 0.0);
         let mut sim = Simulation {
             scene,
             mesh,
@@ -88,6 +98,7 @@ impl Simulation {
             pushed_out: 0,
             frame: 0,
             remesh_stats: Default::default(),
+            faults: Default::default(),
         };
         sim.remesh(RemeshMode::Uniform)?;
         let tolerance = sim.scene.collision.push_out_tolerance;

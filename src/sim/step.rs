@@ -1,14 +1,16 @@
 //! One time step as a list of named, timed stages (DESIGN.md "Pipeline of one time step"):
 //! handles → proximity → assembly/factorisation/solve → integration → friction → collision.
-//! A stage the scene does not need does not run.
+//! A stage the scene does not need does not run. An attempt whose result fails a fault check
+//! (`recover`) is not committed; `Simulation::step` (in `recover`) retries it in halves.
 
 use crate::collision::friction::{apply_friction, FrictionContact, FrictionState};
 use crate::collision::proximity::Contact;
 use crate::math::{Real, Vec3};
 use crate::scene::RemeshMode;
 use crate::solver::pattern::BlockPattern;
-use crate::solver::{ImplicitSystem, StepInput};
+use crate::solver::{ImplicitSystem, SolveError, StepInput};
 
+use super::recover::{EnergyCheck, Fault, StepFault};
 use super::{SimError, Simulation};
 
 impl Simulation {
@@ -50,9 +52,12 @@ impl Simulation {
         Ok(())
     }
 
-    /// One implicit step of size `h`.
-    pub fn step(&mut self, h: Real) -> Result<(), SimError> {
-        let (t0, t1) = (self.time, self.time + h);
+    /// One attempt at an implicit step of size `h` from `self.time` to `t1`. The state is
+    /// committed only when every fault check passes; otherwise it is left as it was (caches
+    /// such as the contact pattern may have grown). With `accept_unresolved`, collisions left
+    /// at the impact-zone iteration cap do not fail the attempt (the last, smallest retry).
+    pub(super) fn attempt_step(&mut self, h: Real, t1: Real, accept_unresolved: bool) -> Result<(), StepFault> {
+        let t0 = self.time;
         let clock = std::time::Instant::now();
         let pinned = self.pinned_velocities(t1, h);
         self.timers.add("handles", clock.elapsed().as_secs_f64());
@@ -83,10 +88,10 @@ impl Simulation {
             contacts: &contacts,
             fixed,
         };
-        let out = self
-            .system
-            .solve_step(&input)
-            .map_err(|source| SimError::Solve { step: self.steps, time: self.time, source })?;
+        let out = self.system.solve_step(&input).map_err(|source| match source {
+            SolveError::NotPositiveDefinite(_) => StepFault::Retry(Fault::Factorisation(source)),
+            _ => StepFault::Fatal(SimError::Solve { step: self.steps, time: self.time, source }),
+        })?;
         self.timers.add("assembly", out.assemble_s);
         self.timers.add("factorisation", out.factor_s);
         self.timers.add("solve", out.solve_s);
@@ -108,6 +113,13 @@ impl Simulation {
             .collect();
         self.timers.add("integration", clock.elapsed().as_secs_f64());
 
+        let clock = std::time::Instant::now();
+        let v_solved = v.clone();
+        let check =
+            EnergyCheck { h, x0: &x_start, v: &v, pinned: &pinned, contacts: &contacts, u0: out.elastic_energy };
+        let solved = self.check_energy(&check)?;
+        self.timers.add("fault_checks", clock.elapsed().as_secs_f64());
+
         if !contacts.is_empty() {
             let clock = std::time::Instant::now();
             self.friction(&contacts, &x_start, &mut v, &inv_mass, h);
@@ -124,6 +136,7 @@ impl Simulation {
         }
         self.timers.add("integration", clock.elapsed().as_secs_f64());
 
+        let cap_hits = self.counters.cap_hits;
         if let Some(world) = &mut self.collisions {
             let clock = std::time::Instant::now();
             let before = x.clone();
@@ -136,9 +149,12 @@ impl Simulation {
             self.timers.add("collision", clock.elapsed().as_secs_f64());
         }
 
-        if !x.iter().chain(v.iter()).all(|p| p.iter().all(|c| c.is_finite())) {
-            return Err(SimError::NonFinite { step: self.steps, time: self.time });
+        let clock = std::time::Instant::now();
+        if self.counters.cap_hits > cap_hits && !accept_unresolved {
+            return Err(StepFault::Retry(Fault::Collisions));
         }
+        self.check_end(h, &x_start, &x, &v, &v_solved, &solved)?;
+        self.timers.add("fault_checks", clock.elapsed().as_secs_f64());
         for (node, (x, v)) in self.mesh.nodes.iter_mut().zip(x.into_iter().zip(v)) {
             node.x = x;
             node.v = v;
