@@ -55,8 +55,10 @@ impl CollisionWorld {
             obs_tris.extend(b.triangles().iter().map(|t| t.map(|i| i + offset)));
             body_start.push(offset + b.vertex_count());
         }
-        let mut obs_edges: Vec<[usize; 2]> =
-            obs_tris.iter().flat_map(|t| (0..3).map(move |k| [t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])])).collect();
+        let mut obs_edges: Vec<[usize; 2]> = obs_tris
+            .iter()
+            .flat_map(|t| (0..3).map(move |k| [t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])]))
+            .collect();
         obs_edges.sort_unstable();
         obs_edges.dedup();
         let mut w = CollisionWorld {
@@ -113,14 +115,17 @@ impl CollisionWorld {
             })
             .collect();
         // One node–face contact per (cloth node, obstacle body) is enough (ARCSim keeps the
-        // nearest face per node): faces sharing an edge would otherwise push twice.
+        // nearest face per node): faces sharing an edge would otherwise push twice. Nearest by
+        // unsigned distance |n · sep| = |gap + thickness|: the most negative gap would be the
+        // face on the far side of a thin obstacle.
         let body = |c: &Contact| {
             let is_node_obstacle = c.nodes[0] < n && c.nodes[1] >= n && c.w[0] == 1.0;
             is_node_obstacle.then(|| self.body_start.partition_point(|&s| s <= c.nodes[1] - n))
         };
         contacts.dedup_by(|b, a| {
             let same = a.nodes[0] == b.nodes[0] && body(a).is_some() && body(a) == body(b);
-            if same && b.gap(&b.nodes.map(pos)) < a.gap(&a.nodes.map(pos)) {
+            let dist = |c: &Contact| (c.gap(&c.nodes.map(pos)) + c.thickness).abs();
+            if same && dist(b) < dist(a) {
                 *a = *b;
             }
             same
@@ -129,13 +134,15 @@ impl CollisionWorld {
     }
 
     /// Cloth node against an obstacle face: the obstacle's outward normal decides the side, so a
-    /// node that is slightly inside is pushed out, not further in.
+    /// node that is slightly inside is pushed out, not further in. Behind the face only counts
+    /// within the thickness too: a long face's bounding box reaches far, and a node in front of
+    /// a slender obstacle (a leg) is also "behind" the faces on its far side.
     fn obstacle_face_contact(&self, nodes: [usize; 4], x: &[Vec3; 4], k: Real) -> Option<Contact> {
         let th = self.params.thickness;
         let cl = closest_point_triangle(&x[0], &x[1], &x[2], &x[3]);
         let outward = (x[2] - x[1]).cross(&(x[3] - x[1])).try_normalize(0.0)?;
         let side = (x[0] - cl.point).dot(&outward);
-        if cl.dist >= th && side >= 0.0 {
+        if cl.dist >= th {
             return None;
         }
         if side < 0.0 && !cl.interior {
@@ -151,7 +158,14 @@ impl CollisionWorld {
     pub fn detect_impacts(&mut self, mesh: &Mesh, x0: &[Vec3], x1: &[Vec3]) -> Vec<([usize; 4], Impact)> {
         let n = mesh.nodes.len();
         let iv = Interval { cloth0: x0, cloth1: x1, obs0: &self.obs_x0, obs1: &self.obs_x1 };
-        let keys = self.broad.candidates(mesh, &self.obs_tris, &self.obs_edges, &iv, CCD_TOLERANCE, self.params.self_collision);
+        let keys = self.broad.candidates(
+            mesh,
+            &self.obs_tris,
+            &self.obs_edges,
+            &iv,
+            CCD_TOLERANCE,
+            self.params.self_collision,
+        );
         let (p0, p1) = (
             |i: usize| if i < n { x0[i] } else { self.obs_x0[i - n] },
             |i: usize| if i < n { x1[i] } else { self.obs_x1[i - n] },
@@ -159,7 +173,11 @@ impl CollisionWorld {
         keys.par_iter()
             .filter_map(|&(kind, nodes)| {
                 let (a, b) = (nodes.map(p0), nodes.map(p1));
-                let hit = if kind == VF { vertex_face_ccd(&a, &b, CCD_TOLERANCE) } else { edge_edge_ccd(&a, &b, CCD_TOLERANCE) };
+                let hit = if kind == VF {
+                    vertex_face_ccd(&a, &b, CCD_TOLERANCE)
+                } else {
+                    edge_edge_ccd(&a, &b, CCD_TOLERANCE)
+                };
                 hit.map(|imp| (nodes, imp))
             })
             .collect()
@@ -167,13 +185,26 @@ impl CollisionWorld {
 
     /// Makes the end-of-step cloth positions `x` collision-free relative to `x0` by iterated CCD
     /// and impact-zone projection. `inv_mass` is 0 for pinned nodes.
-    pub fn resolve(&mut self, mesh: &Mesh, x0: &[Vec3], x: &mut [Vec3], inv_mass: &[Real], counters: &mut CollisionCounters) {
+    pub fn resolve(
+        &mut self,
+        mesh: &Mesh,
+        x0: &[Vec3],
+        x: &mut [Vec3],
+        inv_mass: &[Real],
+        counters: &mut CollisionCounters,
+    ) {
         let n = mesh.nodes.len();
         let delta = ZONE_SEPARATION * self.params.thickness;
         let target: Vec<Vec3> = x.to_vec();
         let mut constraints: Vec<ZoneConstraint> = Vec::new();
+        // Handles win over collisions: an impact whose moving side is all pinned cloth (a handle
+        // driven into an obstacle) has no solution, and would otherwise be met again on every
+        // iteration until the cap.
+        let movable = |(nodes, imp): &([usize; 4], Impact)| {
+            (0..4).any(|j| nodes[j] < n && inv_mass[nodes[j]] > 0.0 && imp.w[j] != 0.0)
+        };
         for _ in 0..self.params.max_iterations {
-            let impacts = self.detect_impacts(mesh, x0, x);
+            let impacts: Vec<_> = self.detect_impacts(mesh, x0, x).into_iter().filter(movable).collect();
             counters.ccd_iterations += 1;
             if impacts.is_empty() {
                 return;
@@ -222,7 +253,7 @@ impl CollisionWorld {
                 }
             }
         }
-        if !self.detect_impacts(mesh, x0, x).is_empty() {
+        if self.detect_impacts(mesh, x0, x).iter().any(movable) {
             counters.cap_hits += 1;
         }
     }

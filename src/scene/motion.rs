@@ -55,6 +55,13 @@ impl Transform {
         self.translate + self.rotate * (self.scale * p)
     }
 
+    /// The inverse map p ↦ R⁻¹(p − translate) / scale.
+    pub fn inverse(&self) -> Transform {
+        let rotate = self.rotate.inverse();
+        let scale = 1.0 / self.scale;
+        Transform { translate: -(rotate * self.translate) * scale, rotate, scale }
+    }
+
     /// `self ∘ inner`: apply `inner` first.
     pub fn compose(&self, inner: &Transform) -> Transform {
         Transform {
@@ -196,6 +203,14 @@ mod tests {
         assert_eq!(m.eval(5.0), m.keys()[2].transform);
         // Smooth: the middle key has zero tangent by symmetry, so x peaks there.
         assert!(m.eval(0.9).translate.x < 1.0 && m.eval(1.1).translate.x < 1.0);
+    }
+
+    #[test]
+    fn inverse_undoes_the_transform() {
+        let t = Transform::new([0.3, -1.0, 2.0], Some([37.0, 1.0, 2.0, -0.5]), 1.7);
+        let p = Vec3::new(0.2, -0.4, 0.9);
+        assert!((t.inverse().apply(&t.apply(&p)) - p).norm() < 1e-12);
+        assert!((t.compose(&t.inverse()).apply(&p) - p).norm() < 1e-12);
     }
 
     #[test]
