@@ -98,6 +98,7 @@ fn confs_read_as_arcsim_reads_them() {
     let square = conf("square.json");
     assert_eq!(square.scene.frames, 325);
     assert_eq!(square.scene.collision.thickness, 1e-3, "ARCSim's default repulsion thickness");
+    assert!(square.scene.collision.self_collision, "ARCSim's cloth–cloth contact is on without obstacles too");
     assert!(square.warnings.is_empty(), "{:?}", square.warnings);
 
     let flag = conf("flag.json");

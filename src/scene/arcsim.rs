@@ -461,9 +461,8 @@ impl Conv<'_> {
         if let Some(k) = magic.stiffness {
             collision.insert(1, ("stiffness", J::Num(k)));
         }
-        if disabled.collision {
-            collision.push(("self_collision", J::Bool(false)));
-        }
+        // ARCSim handles cloth–cloth contact in every scene unless its collision stage is off.
+        collision.push(("self_collision", J::Bool(!disabled.collision)));
         let name = self.file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         Ok(obj(vec![
             ("version", J::Int(1)),
