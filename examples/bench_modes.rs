@@ -14,7 +14,7 @@ use viewcloth::sim::{run, RunOptions};
 fn simulate(scene_path: &Path, mode: RemeshMode, frames: usize) -> RunStats {
     let mut scene = scene::load_file(scene_path).unwrap_or_else(|e| panic!("{e}"));
     assert!(scene.set_remesh_mode(mode) > 0, "the scene has no remesh block");
-    let out_dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("bench_modes_{mode:?}"));
+    let out_dir = std::env::temp_dir().join(format!("viewcloth_bench_modes_{mode:?}"));
     let opts = RunOptions { out_dir, frames: Some(frames), quiet: true, export_obstacles: false };
     run(scene, &opts).unwrap_or_else(|e| panic!("{e}"))
 }
@@ -36,9 +36,18 @@ fn main() {
     println!("scene `{}`, {frames} frames\n", scene_path.display());
     println!("| mode | wall s (frames 1..) | s/frame | mean faces | remeshing share |");
     println!("|---|---|---|---|---|");
-    println!("| adaptive | {ta:.1} | {:.3} | {:.0} | {:.1}% |", ta / frames as f64, mean_faces(&adaptive), 100.0 * remesh / ta);
+    println!(
+        "| adaptive | {ta:.1} | {:.3} | {:.0} | {:.1}% |",
+        ta / frames as f64,
+        mean_faces(&adaptive),
+        100.0 * remesh / ta
+    );
     println!("| uniform | {tu:.1} | {:.3} | {:.0} | – |", tu / frames as f64, mean_faces(&uniform));
-    println!("\nuniform / adaptive wall time: {:.2}×; faces {:.2}×\n", tu / ta, mean_faces(&uniform) / mean_faces(&adaptive));
+    println!(
+        "\nuniform / adaptive wall time: {:.2}×; faces {:.2}×\n",
+        tu / ta,
+        mean_faces(&uniform) / mean_faces(&adaptive)
+    );
     println!("| frame | adaptive faces | adaptive s | uniform s |");
     println!("|---|---|---|---|");
     for (a, u) in adaptive.frames.iter().zip(&uniform.frames).step_by(5) {
@@ -54,5 +63,8 @@ fn main() {
         }
     }
     stages.sort_by(|a, b| b.1.total_cmp(&a.1));
-    println!("\nadaptive stage shares: {}", stages.iter().map(|(k, v)| format!("{k} {:.0}%", 100.0 * v / ta)).collect::<Vec<_>>().join(", "));
+    println!(
+        "\nadaptive stage shares: {}",
+        stages.iter().map(|(k, v)| format!("{k} {:.0}%", 100.0 * v / ta)).collect::<Vec<_>>().join(", ")
+    );
 }

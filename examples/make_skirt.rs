@@ -66,7 +66,8 @@ fn skirt_obj() -> String {
     let slant = ((HEM_R - WAIST_R).powi(2) + (WAIST_Z - HEM_Z).powi(2)).sqrt();
     let rho1 = WAIST_R * slant / (HEM_R - WAIST_R);
     let sector = TAU * WAIST_R / rho1;
-    let mut out = String::from("# A-line skirt (examples/make_skirt.rs): vertex j*64+i is ring j (0 = waist), column i\n");
+    let mut out =
+        String::from("# A-line skirt (examples/make_skirt.rs): vertex j*64+i is ring j (0 = waist), column i\n");
     for j in 0..=DOWN {
         let (r, z) = ring(j);
         for i in 0..AROUND {

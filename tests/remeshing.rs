@@ -83,7 +83,8 @@ fn crumple_square_refines_when_squeezed_and_coarsens_when_released() {
 #[test]
 fn sheet_on_sphere_adaptive_uses_3x_fewer_faces_than_uniform_without_penetrating() {
     let frames = 25;
-    let adaptive = run_cli(&scene_path("sheet_on_sphere.json"), &temp_dir("sos_adaptive"), &["--frames", &frames.to_string()]);
+    let adaptive =
+        run_cli(&scene_path("sheet_on_sphere.json"), &temp_dir("sos_adaptive"), &["--frames", &frames.to_string()]);
     assert_eq!(adaptive["mode"], "adaptive");
     let fr = adaptive["frames"].as_array().unwrap();
     assert!(fr.iter().all(|f| f["penetrations"].as_u64() == Some(0)), "adaptive run penetrated");

@@ -25,10 +25,12 @@ pub struct Interval<'a> {
 
 impl Interval<'_> {
     fn cloth_box(&self, ids: &[usize]) -> Aabb {
-        Aabb::from_points(ids.iter().map(|&i| &self.cloth0[i])).merge(&Aabb::from_points(ids.iter().map(|&i| &self.cloth1[i])))
+        Aabb::from_points(ids.iter().map(|&i| &self.cloth0[i]))
+            .merge(&Aabb::from_points(ids.iter().map(|&i| &self.cloth1[i])))
     }
     fn obs_box(&self, ids: &[usize]) -> Aabb {
-        Aabb::from_points(ids.iter().map(|&i| &self.obs0[i])).merge(&Aabb::from_points(ids.iter().map(|&i| &self.obs1[i])))
+        Aabb::from_points(ids.iter().map(|&i| &self.obs0[i]))
+            .merge(&Aabb::from_points(ids.iter().map(|&i| &self.obs1[i])))
     }
 }
 

@@ -73,7 +73,10 @@ pub struct Bvh {
 impl Bvh {
     /// Builds by median split along the longest axis of the primitive centres.
     pub fn build(boxes: &[Aabb]) -> Self {
-        let mut bvh = Bvh { nodes: Vec::with_capacity(2 * boxes.len() / LEAF_SIZE + 1), order: (0..boxes.len() as u32).collect() };
+        let mut bvh = Bvh {
+            nodes: Vec::with_capacity(2 * boxes.len() / LEAF_SIZE + 1),
+            order: (0..boxes.len() as u32).collect(),
+        };
         if !boxes.is_empty() {
             bvh.build_node(boxes, 0, boxes.len());
         }
@@ -92,7 +95,13 @@ impl Bvh {
             a
         });
         let ext = centers.max - centers.min;
-        let axis = if ext.x >= ext.y && ext.x >= ext.z { 0 } else if ext.y >= ext.z { 1 } else { 2 };
+        let axis = if ext.x >= ext.y && ext.x >= ext.z {
+            0
+        } else if ext.y >= ext.z {
+            1
+        } else {
+            2
+        };
         let mid = (start + end) / 2;
         self.order[start..end].select_nth_unstable_by(mid - start, |&a, &b| {
             let (ca, cb) = (boxes[a as usize].center()[axis], boxes[b as usize].center()[axis]);
@@ -195,8 +204,7 @@ impl Bvh {
 
     /// Every unordered pair (a < b) of this tree's primitives whose boxes overlap.
     pub fn self_pairs(&self, boxes: &[Aabb]) -> Vec<(usize, usize)> {
-        let mut out: Vec<(usize, usize)> =
-            self.pairs(boxes, self, boxes).into_iter().filter(|(a, b)| a < b).collect();
+        let mut out: Vec<(usize, usize)> = self.pairs(boxes, self, boxes).into_iter().filter(|(a, b)| a < b).collect();
         out.dedup();
         out
     }

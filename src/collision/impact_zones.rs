@@ -194,7 +194,9 @@ pub fn solve_lcp(q: &DMatrix<Real>, c: &DVector<Real>, tol: Real) -> Option<DVec
     let reg = 1e-12 * scale;
     for _ in 0..(3 * k + 10) {
         let w = q * &lambda + c;
-        let Some(t) = (0..k).filter(|&i| !passive[i] && w[i] < -tol).min_by(|&a, &b| w[a].total_cmp(&w[b]).then(a.cmp(&b))) else {
+        let Some(t) =
+            (0..k).filter(|&i| !passive[i] && w[i] < -tol).min_by(|&a, &b| w[a].total_cmp(&w[b]).then(a.cmp(&b)))
+        else {
             return Some(lambda);
         };
         if q[(t, t)] <= reg {

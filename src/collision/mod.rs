@@ -1,13 +1,13 @@
 //! Obstacles and collisions: broad phase, proximity repulsion, continuous collision detection
 //! and impact-zone resolution.
 
+pub mod broad;
 pub mod bvh;
-pub mod impact_zones;
-pub mod friction;
 pub mod ccd;
+pub mod friction;
 pub mod geometry;
-pub mod proximity;
+pub mod impact_zones;
 pub mod obstacle;
+pub mod proximity;
 pub mod sdf;
 pub mod world;
-pub mod broad;

@@ -172,7 +172,13 @@ mod tests {
         // Beside an edge (projecting outside the face): no node–face contact. In a flat sheet
         // that is every node next to a face it is not on.
         assert!(node_face_contact([0, 1, 2, 3], &[v(0.5, -0.003, 0.004), a, b, c], 0.01, 1.0).is_none());
-        assert!(node_face_contact([0, 1, 2, 3], &[v(1.001, 0.5, 0.0), v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(1.0, 1.0, 0.0)], 0.01, 1.0).is_none());
+        assert!(node_face_contact(
+            [0, 1, 2, 3],
+            &[v(1.001, 0.5, 0.0), v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(1.0, 1.0, 0.0)],
+            0.01,
+            1.0
+        )
+        .is_none());
         // Farther than the thickness: no contact.
         assert!(node_face_contact([0, 1, 2, 3], &[v(0.2, 0.3, 0.02), a, b, c], 0.01, 1.0).is_none());
     }

@@ -55,19 +55,13 @@ fn to_v3(x: &[Vec3; 4]) -> [V3<f64>; 4] {
 
 /// ∂²θ/∂x², exact, by forward-mode differentiation of `dihedral_gradient`.
 pub fn dihedral_hessian(x: &[Vec3; 4]) -> Mat12 {
-    let xd: [V3<Dual<12>>; 4] =
-        std::array::from_fn(|i| V3(std::array::from_fn(|d| Dual::var(x[i][d], 3 * i + d))));
+    let xd: [V3<Dual<12>>; 4] = std::array::from_fn(|i| V3(std::array::from_fn(|d| Dual::var(x[i][d], 3 * i + d))));
     let g = dihedral_gradient(&xd);
     Mat12::from_fn(|r, c| g[r / 3].0[r % 3].eps[c])
 }
 
 /// Energy, gradient and Hessian of one hinge; `kb` is the bending stiffness (N·m).
-pub fn bending(
-    x: &[Vec3; 4],
-    rest: &BendingRest,
-    kb: Real,
-    proj: Projection,
-) -> (Real, Vec12, Mat12) {
+pub fn bending(x: &[Vec3; 4], rest: &BendingRest, kb: Real, proj: Projection) -> (Real, Vec12, Mat12) {
     let xv = to_v3(x);
     let theta = dihedral_angle(&xv);
     let g = dihedral_gradient(&xv);

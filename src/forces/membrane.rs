@@ -71,12 +71,7 @@ pub fn strain_jacobian(f: &Mat3x2, b: &[Vec2; 3]) -> nalgebra::SMatrix<Real, 3, 
 }
 
 /// Energy, gradient (w.r.t. x₀, x₁, x₂ stacked) and Hessian of one membrane triangle.
-pub fn membrane(
-    x: &[Vec3; 3],
-    rest: &MembraneRest,
-    k: &MembraneStiffness,
-    proj: Projection,
-) -> (Real, Vec9, Mat9) {
+pub fn membrane(x: &[Vec3; 3], rest: &MembraneRest, k: &MembraneStiffness, proj: Projection) -> (Real, Vec9, Mat9) {
     let f = deformation_gradient(x, rest);
     let (f0, f1) = (f.column(0).into_owned(), f.column(1).into_owned());
     let e11 = 0.5 * (f0.dot(&f0) - 1.0);

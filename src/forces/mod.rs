@@ -68,10 +68,7 @@ impl RestState {
                 nodes,
                 edge: e,
                 material: mesh.faces[f0.idx()].material as usize,
-                rest: BendingRest {
-                    shape: 3.0 * len2 / area,
-                    theta0: rest_angle(e),
-                },
+                rest: BendingRest { shape: 3.0 * len2 / area, theta0: rest_angle(e) },
                 measured: data_driven::HingeRest::new([du0, du1], len2.sqrt(), area),
             });
         }

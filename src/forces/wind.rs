@@ -27,7 +27,6 @@ pub fn wind_face(x: &[Vec3; 3], v: &[Vec3; 3], wind: &Wind) -> (Vec3, Mat3) {
     let f = area * (wind.density * vn.abs() * vn * n + wind.drag * vt) / 3.0;
     let nnt = n * n.transpose();
     // ∂f/∂v̄ = −A(2ρ|v_n| n̂n̂ᵀ + c_d (I − n̂n̂ᵀ)); ∂v̄/∂vⱼ = I/3; f split in thirds.
-    let dfdv =
-        -area * (2.0 * wind.density * vn.abs() * nnt + wind.drag * (Mat3::identity() - nnt)) / 9.0;
+    let dfdv = -area * (2.0 * wind.density * vn.abs() * nnt + wind.drag * (Mat3::identity() - nnt)) / 9.0;
     (f, dfdv)
 }

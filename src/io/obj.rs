@@ -37,33 +37,18 @@ pub struct ObjError {
 }
 
 fn err(line: usize, msg: impl Into<String>) -> ObjError {
-    ObjError {
-        line,
-        msg: msg.into(),
-    }
+    ObjError { line, msg: msg.into() }
 }
 
-fn parse_floats<const N: usize>(
-    words: &[&str],
-    line: usize,
-    what: &str,
-) -> Result<[f64; N], ObjError> {
+fn parse_floats<const N: usize>(words: &[&str], line: usize, what: &str) -> Result<[f64; N], ObjError> {
     if words.len() < N {
-        return Err(err(
-            line,
-            format!("'{what}' needs {N} numbers, found {}", words.len()),
-        ));
+        return Err(err(line, format!("'{what}' needs {N} numbers, found {}", words.len())));
     }
     let mut out = [0.0; N];
     for (o, w) in out.iter_mut().zip(words) {
-        let x: f64 = w
-            .parse()
-            .map_err(|_| err(line, format!("'{what}': expected a number, found '{w}'")))?;
+        let x: f64 = w.parse().map_err(|_| err(line, format!("'{what}': expected a number, found '{w}'")))?;
         if !x.is_finite() {
-            return Err(err(
-                line,
-                format!("'{what}': coordinate is not finite ('{w}')"),
-            ));
+            return Err(err(line, format!("'{what}': coordinate is not finite ('{w}')")));
         }
         *o = x;
     }
@@ -72,15 +57,10 @@ fn parse_floats<const N: usize>(
 
 /// Resolves a 1-based (or negative, relative) OBJ index against `count` elements seen so far.
 fn resolve_index(word: &str, count: usize, line: usize, what: &str) -> Result<usize, ObjError> {
-    let i: i64 = word
-        .parse()
-        .map_err(|_| err(line, format!("face: bad {what} index '{word}'")))?;
+    let i: i64 = word.parse().map_err(|_| err(line, format!("face: bad {what} index '{word}'")))?;
     let idx = if i > 0 { i - 1 } else { count as i64 + i };
     if i == 0 || idx < 0 || idx >= count as i64 {
-        return Err(err(
-            line,
-            format!("face: {what} index {i} out of range (1..={count})"),
-        ));
+        return Err(err(line, format!("face: {what} index {i} out of range (1..={count})")));
     }
     Ok(idx as usize)
 }
@@ -105,34 +85,20 @@ pub fn parse_obj(text: &str) -> Result<ObjData, ObjError> {
             }
             "f" => {
                 if rest.len() < 3 {
-                    return Err(err(
-                        line,
-                        format!("face needs at least 3 corners, found {}", rest.len()),
-                    ));
+                    return Err(err(line, format!("face needs at least 3 corners, found {}", rest.len())));
                 }
                 let mut corners = Vec::with_capacity(rest.len());
                 for w in &rest {
                     let mut parts = w.split('/');
-                    let v = resolve_index(
-                        parts.next().unwrap_or(""),
-                        d.positions.len(),
-                        line,
-                        "vertex",
-                    )?;
+                    let v = resolve_index(parts.next().unwrap_or(""), d.positions.len(), line, "vertex")?;
                     let vt = match parts.next() {
-                        Some(s) if !s.is_empty() => {
-                            Some(resolve_index(s, d.texcoords.len(), line, "texture")?)
-                        }
+                        Some(s) if !s.is_empty() => Some(resolve_index(s, d.texcoords.len(), line, "texture")?),
                         _ => None,
                     };
                     corners.push(Corner { v, vt });
                 }
-                if corners.iter().any(|c| c.vt.is_some()) != corners.iter().all(|c| c.vt.is_some())
-                {
-                    return Err(err(
-                        line,
-                        "face mixes corners with and without texture coordinates",
-                    ));
+                if corners.iter().any(|c| c.vt.is_some()) != corners.iter().all(|c| c.vt.is_some()) {
+                    return Err(err(line, "face mixes corners with and without texture coordinates"));
                 }
                 for k in 1..corners.len() - 1 {
                     d.triangles.push([corners[0], corners[k], corners[k + 1]]);
@@ -147,15 +113,8 @@ pub fn parse_obj(text: &str) -> Result<ObjData, ObjError> {
     }
     let with_vt = d.triangles.iter().filter(|t| t[0].vt.is_some()).count();
     if with_vt != 0 && with_vt != d.triangles.len() {
-        let i = d
-            .triangles
-            .iter()
-            .position(|t| t[0].vt.is_none())
-            .unwrap_or(0);
-        return Err(err(
-            d.face_line[i],
-            "some faces have texture coordinates and others do not",
-        ));
+        let i = d.triangles.iter().position(|t| t[0].vt.is_none()).unwrap_or(0);
+        return Err(err(d.face_line[i], "some faces have texture coordinates and others do not"));
     }
     Ok(d)
 }
@@ -179,10 +138,7 @@ pub fn frame_obj(mesh: &Mesh, cloth_names: &[String]) -> String {
     for (f, face) in mesh.faces.iter().enumerate() {
         let cloth = mesh.nodes[mesh.node_of(face.v[0]).idx()].cloth as usize;
         if current != Some(cloth) {
-            let name = cloth_names
-                .get(cloth)
-                .map(String::as_str)
-                .unwrap_or("cloth");
+            let name = cloth_names.get(cloth).map(String::as_str).unwrap_or("cloth");
             let _ = writeln!(s, "o {name}");
             current = Some(cloth);
         }
@@ -240,12 +196,7 @@ mod tests {
     #[test]
     fn reports_line_numbers() {
         assert_eq!(parse_obj("v 0 0 0\nv 1 nan 0\n").unwrap_err().line, 2);
-        assert_eq!(
-            parse_obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 4\n")
-                .unwrap_err()
-                .line,
-            4
-        );
+        assert_eq!(parse_obj("v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 4\n").unwrap_err().line, 4);
         assert_eq!(parse_obj("v 0 0 0\n").unwrap_err().line, 0);
         assert!(parse_obj("v 0 0 inf\n").unwrap_err().msg.contains("finite"));
     }

@@ -15,12 +15,7 @@ pub struct Dual<const N: usize> {
 
 /// The arithmetic an analytic kernel needs, implemented by `f64` and `Dual`.
 pub trait Num:
-    Copy
-    + Add<Output = Self>
-    + Sub<Output = Self>
-    + Mul<Output = Self>
-    + Div<Output = Self>
-    + Neg<Output = Self>
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self> + Neg<Output = Self>
 {
     fn cst(v: f64) -> Self;
     fn re(self) -> f64;
@@ -51,66 +46,45 @@ impl<const N: usize> Dual<N> {
         Dual { re, eps }
     }
     fn chain(self, re: f64, d: f64) -> Self {
-        Dual {
-            re,
-            eps: self.eps.map(|e| d * e),
-        }
+        Dual { re, eps: self.eps.map(|e| d * e) }
     }
 }
 
 impl<const N: usize> Add for Dual<N> {
     type Output = Self;
     fn add(self, o: Self) -> Self {
-        Dual {
-            re: self.re + o.re,
-            eps: std::array::from_fn(|i| self.eps[i] + o.eps[i]),
-        }
+        Dual { re: self.re + o.re, eps: std::array::from_fn(|i| self.eps[i] + o.eps[i]) }
     }
 }
 impl<const N: usize> Sub for Dual<N> {
     type Output = Self;
     fn sub(self, o: Self) -> Self {
-        Dual {
-            re: self.re - o.re,
-            eps: std::array::from_fn(|i| self.eps[i] - o.eps[i]),
-        }
+        Dual { re: self.re - o.re, eps: std::array::from_fn(|i| self.eps[i] - o.eps[i]) }
     }
 }
 impl<const N: usize> Mul for Dual<N> {
     type Output = Self;
     fn mul(self, o: Self) -> Self {
-        Dual {
-            re: self.re * o.re,
-            eps: std::array::from_fn(|i| self.eps[i] * o.re + self.re * o.eps[i]),
-        }
+        Dual { re: self.re * o.re, eps: std::array::from_fn(|i| self.eps[i] * o.re + self.re * o.eps[i]) }
     }
 }
 impl<const N: usize> Div for Dual<N> {
     type Output = Self;
     fn div(self, o: Self) -> Self {
         let inv = 1.0 / o.re;
-        Dual {
-            re: self.re * inv,
-            eps: std::array::from_fn(|i| (self.eps[i] - self.re * inv * o.eps[i]) * inv),
-        }
+        Dual { re: self.re * inv, eps: std::array::from_fn(|i| (self.eps[i] - self.re * inv * o.eps[i]) * inv) }
     }
 }
 impl<const N: usize> Neg for Dual<N> {
     type Output = Self;
     fn neg(self) -> Self {
-        Dual {
-            re: -self.re,
-            eps: self.eps.map(|e| -e),
-        }
+        Dual { re: -self.re, eps: self.eps.map(|e| -e) }
     }
 }
 
 impl<const N: usize> Num for Dual<N> {
     fn cst(v: f64) -> Self {
-        Dual {
-            re: v,
-            eps: [0.0; N],
-        }
+        Dual { re: v, eps: [0.0; N] }
     }
     fn re(self) -> f64 {
         self.re
@@ -122,10 +96,7 @@ impl<const N: usize> Num for Dual<N> {
     fn atan2(self, x: Self) -> Self {
         let (y, xr) = (self.re, x.re);
         let r2 = y * y + xr * xr;
-        Dual {
-            re: y.atan2(xr),
-            eps: std::array::from_fn(|i| (xr * self.eps[i] - y * x.eps[i]) / r2),
-        }
+        Dual { re: y.atan2(xr), eps: std::array::from_fn(|i| (xr * self.eps[i] - y * x.eps[i]) / r2) }
     }
 }
 
@@ -148,11 +119,7 @@ impl<T: Num> V3<T> {
     }
     pub fn cross(self, o: Self) -> Self {
         let (a, b) = (self.0, o.0);
-        V3([
-            a[1] * b[2] - a[2] * b[1],
-            a[2] * b[0] - a[0] * b[2],
-            a[0] * b[1] - a[1] * b[0],
-        ])
+        V3([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
     }
 }
 

@@ -13,27 +13,15 @@ pub fn rectangle(width: f64, height: f64, nx: usize, ny: usize) -> Result<Mesh, 
         for i in 0..=nx {
             let u = Vec2::new(width * i as f64 / nx as f64, height * j as f64 / ny as f64);
             let id = mesh.nodes.len() as u32;
-            mesh.nodes.push(Node {
-                x: Vec3::new(u.x, u.y, 0.0),
-                v: Vec3::zeros(),
-                mass: 0.0,
-                cloth: 0,
-            });
-            mesh.verts.push(Vert {
-                u,
-                node: NodeId(id),
-            });
+            mesh.nodes.push(Node { x: Vec3::new(u.x, u.y, 0.0), v: Vec3::zeros(), mass: 0.0, cloth: 0 });
+            mesh.verts.push(Vert { u, node: NodeId(id) });
         }
     }
     let id = |i: usize, j: usize| VertId((j * (nx + 1) + i) as u32);
     for j in 0..ny {
         for i in 0..nx {
             let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
-            let tris = if (i + j) % 2 == 0 {
-                [[a, b, c], [a, c, d]]
-            } else {
-                [[a, b, d], [b, c, d]]
-            };
+            let tris = if (i + j) % 2 == 0 { [[a, b, c], [a, c, d]] } else { [[a, b, d], [b, c, d]] };
             for v in tris {
                 mesh.faces.push(Face { v, material: 0 });
             }

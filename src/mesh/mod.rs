@@ -87,22 +87,14 @@ impl Mesh {
     #[inline]
     pub fn face_nodes(&self, f: usize) -> [usize; 3] {
         let fv = &self.faces[f].v;
-        [
-            self.verts[fv[0].idx()].node.idx(),
-            self.verts[fv[1].idx()].node.idx(),
-            self.verts[fv[2].idx()].node.idx(),
-        ]
+        [self.verts[fv[0].idx()].node.idx(), self.verts[fv[1].idx()].node.idx(), self.verts[fv[2].idx()].node.idx()]
     }
 
     /// Material-space corners of a face.
     #[inline]
     pub fn face_uv(&self, f: usize) -> [Vec2; 3] {
         let fv = &self.faces[f].v;
-        [
-            self.verts[fv[0].idx()].u,
-            self.verts[fv[1].idx()].u,
-            self.verts[fv[2].idx()].u,
-        ]
+        [self.verts[fv[0].idx()].u, self.verts[fv[1].idx()].u, self.verts[fv[2].idx()].u]
     }
 
     /// Signed material-space area (positive for counter-clockwise faces).

@@ -29,10 +29,7 @@ impl Mesh {
                 let (a, b) = (nodes[(k + 1) % 3] as u32, nodes[(k + 2) % 3] as u32);
                 let key = (a.min(b), a.max(b));
                 let e = *map.entry(key).or_insert_with(|| {
-                    edges.push(Edge {
-                        n: [NodeId(a), NodeId(b)],
-                        adj: EdgeFaces::default(),
-                    });
+                    edges.push(Edge { n: [NodeId(a), NodeId(b)], adj: EdgeFaces::default() });
                     EdgeId(edges.len() as u32 - 1)
                 });
                 let edge = &mut edges[e.idx()];
@@ -61,12 +58,7 @@ impl Mesh {
         let (f1, k1) = edge.adj.0[1]?;
         let a = self.face_nodes(f0.idx());
         let b = self.face_nodes(f1.idx());
-        Some([
-            edge.n[0].idx(),
-            edge.n[1].idx(),
-            a[k0 as usize],
-            b[k1 as usize],
-        ])
+        Some([edge.n[0].idx(), edge.n[1].idx(), a[k0 as usize], b[k1 as usize]])
     }
 
     /// True when the edge is interior in world space but its two faces use different verts

@@ -15,17 +15,9 @@ pub enum MeshError {
     #[error("face {face} duplicates face {other}")]
     DuplicateFace { face: usize, other: usize },
     #[error("vert {vert} points to node {node}, but there are only {count} nodes")]
-    BadNodeRef {
-        vert: usize,
-        node: usize,
-        count: usize,
-    },
+    BadNodeRef { vert: usize, node: usize, count: usize },
     #[error("face {face} references vert {vert}, but there are only {count} verts")]
-    BadVertRef {
-        face: usize,
-        vert: usize,
-        count: usize,
-    },
+    BadVertRef { face: usize, vert: usize, count: usize },
     #[error("adjacency is inconsistent at {what}")]
     Adjacency { what: String },
     #[error("node {node} has a non-finite position or velocity")]
@@ -42,11 +34,7 @@ impl Mesh {
     pub fn validate(&self) -> Result<(), MeshError> {
         for (i, v) in self.verts.iter().enumerate() {
             if v.node.idx() >= self.nodes.len() {
-                return Err(MeshError::BadNodeRef {
-                    vert: i,
-                    node: v.node.idx(),
-                    count: self.nodes.len(),
-                });
+                return Err(MeshError::BadNodeRef { vert: i, node: v.node.idx(), count: self.nodes.len() });
             }
         }
         for (i, n) in self.nodes.iter().enumerate() {
@@ -58,11 +46,7 @@ impl Mesh {
         for (f, face) in self.faces.iter().enumerate() {
             for v in face.v {
                 if v.idx() >= self.verts.len() {
-                    return Err(MeshError::BadVertRef {
-                        face: f,
-                        vert: v.idx(),
-                        count: self.verts.len(),
-                    });
+                    return Err(MeshError::BadVertRef { face: f, vert: v.idx(), count: self.verts.len() });
                 }
             }
             total += self.material_area(f).abs();
@@ -90,11 +74,7 @@ impl Mesh {
     fn validate_adjacency(&self) -> Result<(), MeshError> {
         let bad = |what: String| Err(MeshError::Adjacency { what });
         if self.face_edges.len() != self.faces.len() {
-            return bad(format!(
-                "face_edges has {} entries for {} faces",
-                self.face_edges.len(),
-                self.faces.len()
-            ));
+            return bad(format!("face_edges has {} entries for {} faces", self.face_edges.len(), self.faces.len()));
         }
         let mut keys = HashSet::new();
         for (e, edge) in self.edges.iter().enumerate() {
@@ -123,13 +103,7 @@ impl Mesh {
                 if !((p == a && q == b) || (p == b && q == a)) {
                     return bad(format!("face {f} corner {k}"));
                 }
-                if !edge
-                    .adj
-                    .0
-                    .iter()
-                    .flatten()
-                    .any(|(g, kk)| g.idx() == f && *kk as usize == k)
-                {
+                if !edge.adj.0.iter().flatten().any(|(g, kk)| g.idx() == f && *kk as usize == k) {
                     return bad(format!("edge {} does not list face {f}", fe[k].idx()));
                 }
             }

@@ -39,7 +39,12 @@ pub struct RemeshLimits {
 
 /// Remeshes `mesh` to the per-vert sizing metrics `vsize`; nodes flagged in `pinned` (handles)
 /// survive. Returns the new mesh with the map from old to new node ids.
-pub fn remesh(mesh: &Mesh, vsize: Vec<Mat2>, pinned: Vec<bool>, limits: &RemeshLimits) -> Result<(Finished, RemeshStats), MeshError> {
+pub fn remesh(
+    mesh: &Mesh,
+    vsize: Vec<Mat2>,
+    pinned: Vec<bool>,
+    limits: &RemeshLimits,
+) -> Result<(Finished, RemeshStats), MeshError> {
     let mut w = Work::new(mesh, vsize, pinned);
     let mut stats = RemeshStats::default();
     flip_all(&mut w, &mut stats);
@@ -73,10 +78,12 @@ fn flip_around(w: &mut Work, verts: &[usize], stats: &mut RemeshStats) {
     for _ in 0..MAX_PASSES {
         let mut edges: Vec<(usize, usize)> = verts
             .iter()
-            .flat_map(|&v| w.vfaces[v].iter().flat_map(|&f| {
-                let t = w.faces[f];
-                (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])))
-            }))
+            .flat_map(|&v| {
+                w.vfaces[v].iter().flat_map(|&f| {
+                    let t = w.faces[f];
+                    (0..3).map(move |k| (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])))
+                })
+            })
             .collect();
         edges.sort_unstable();
         edges.dedup();
@@ -124,7 +131,10 @@ fn collapse_all(w: &mut Work, limits: &RemeshLimits, stats: &mut RemeshStats) {
     for _ in 0..MAX_PASSES {
         let mut collapsed = 0;
         for (a, b) in w.edges() {
-            if !(w.valive[a] && w.valive[b]) || w.metric_length(a, b) >= COLLAPSE_MAX_LENGTH || w.edge_faces(a, b).is_empty() {
+            if !(w.valive[a] && w.valive[b])
+                || w.metric_length(a, b) >= COLLAPSE_MAX_LENGTH
+                || w.edge_faces(a, b).is_empty()
+            {
                 continue;
             }
             for (i, j) in [(a, b), (b, a)] {

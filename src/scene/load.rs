@@ -8,12 +8,14 @@ use super::motion::{KeyVelocity, Keyframe, Motion, Transform};
 use super::spec::{
     ClothSpec, CollisionSpec, HandleSpec, KeyframeSpec, MotSpec, ObstacleSpec, RemeshSpec, SceneSpec, TransformSpec,
 };
-use super::{Cloth, Remesh, RemeshMode, CollisionParams, FollowObstacle, Handle, InputError, Obstacle, ObstacleShape, Scene};
+use super::{
+    Cloth, CollisionParams, FollowObstacle, Handle, InputError, Obstacle, ObstacleShape, Remesh, RemeshMode, Scene,
+};
 use crate::forces::wind::Wind;
 use crate::io::obj::{read_obj, ObjData};
 use crate::math::{cross2, Vec2, Vec3};
-use crate::sizing::{Combine, SizingParams};
 use crate::mesh::{rectangle, Face, Mesh, MeshError, Node, NodeId, Vert, VertId};
+use crate::sizing::{Combine, SizingParams};
 
 /// The built-in default shot (`viewcloth simulate` with no scene).
 pub const DEFAULT_SCENE: &str = include_str!("../../scenes/hanging_sheet.json");
@@ -208,13 +210,18 @@ fn remesh_params(ctx: &Ctx, path: &str, r: &RemeshSpec) -> Res<Remesh> {
     let mode = match r.mode.as_deref() {
         None | Some("adaptive") => RemeshMode::Adaptive,
         Some("uniform") => RemeshMode::Uniform,
-        Some(other) => return Err(ctx.err(format!("{path}.mode"), format!("expected \"adaptive\" or \"uniform\", got \"{other}\""))),
+        Some(other) => {
+            return Err(
+                ctx.err(format!("{path}.mode"), format!("expected \"adaptive\" or \"uniform\", got \"{other}\""))
+            )
+        }
     };
     let opt = |field: &str, v: Option<f64>| v.map(|x| positive(ctx, &format!("{path}.{field}"), x)).transpose();
     let size_min = positive(ctx, &format!("{path}.size[0]"), r.size[0])?;
     let size_max = positive(ctx, &format!("{path}.size[1]"), r.size[1])?;
     if size_min > size_max {
-        return Err(ctx.err(format!("{path}.size"), format!("expected [min, max] with min ≤ max, got [{size_min}, {size_max}]")));
+        return Err(ctx
+            .err(format!("{path}.size"), format!("expected [min, max] with min ≤ max, got [{size_min}, {size_max}]")));
     }
     let aspect_min = r.aspect_min.unwrap_or(0.2);
     if !(aspect_min > 0.0 && aspect_min <= 1.0) {
@@ -223,7 +230,9 @@ fn remesh_params(ctx: &Ctx, path: &str, r: &RemeshSpec) -> Res<Remesh> {
     let combine = match r.combine.as_deref() {
         None | Some("max") => Combine::Max,
         Some("sum") => Combine::Sum,
-        Some(other) => return Err(ctx.err(format!("{path}.combine"), format!("expected \"max\" or \"sum\", got \"{other}\""))),
+        Some(other) => {
+            return Err(ctx.err(format!("{path}.combine"), format!("expected \"max\" or \"sum\", got \"{other}\"")))
+        }
     };
     let every = match r.every {
         None => 1,

@@ -61,12 +61,7 @@ pub const DEFAULT_PRESET: &str = "cotton";
 const fn preset(density: Real, warp: Real, weft: Real, shear: Real, bending: Real) -> Material {
     Material {
         density,
-        membrane: MembraneStiffness {
-            k11: warp,
-            k12: 0.0,
-            k22: weft,
-            k33: shear,
-        },
+        membrane: MembraneStiffness { k11: warp, k12: 0.0, k22: weft, k33: shear },
         bending,
         damping: 1e-3,
         measured: None,
@@ -79,35 +74,22 @@ pub fn find_preset(name: &str) -> Option<&'static Material> {
 
 /// Resolves a material block into a `Material`. Errors are `(field, what was expected)`.
 pub fn resolve(spec: &MaterialSpec) -> Result<Material, (&'static str, String)> {
-    let names = || {
-        PRESETS
-            .iter()
-            .map(|(n, _)| *n)
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
+    let names = || PRESETS.iter().map(|(n, _)| *n).collect::<Vec<_>>().join(", ");
     let base_name = spec.preset.as_deref().unwrap_or(DEFAULT_PRESET);
-    let mut m = find_preset(base_name)
-        .ok_or_else(|| ("preset", format!("one of {}, got \"{base_name}\"", names())))?
-        .clone();
-    let positive =
-        |field: &'static str, v: Option<f64>| -> Result<Option<f64>, (&'static str, String)> {
-            match v {
-                Some(x) if !(x > 0.0 && x.is_finite()) => {
-                    Err((field, format!("a positive number, got {x}")))
-                }
-                other => Ok(other),
-            }
-        };
-    let non_negative =
-        |field: &'static str, v: Option<f64>| -> Result<Option<f64>, (&'static str, String)> {
-            match v {
-                Some(x) if !(x >= 0.0 && x.is_finite()) => {
-                    Err((field, format!("a number ≥ 0, got {x}")))
-                }
-                other => Ok(other),
-            }
-        };
+    let mut m =
+        find_preset(base_name).ok_or_else(|| ("preset", format!("one of {}, got \"{base_name}\"", names())))?.clone();
+    let positive = |field: &'static str, v: Option<f64>| -> Result<Option<f64>, (&'static str, String)> {
+        match v {
+            Some(x) if !(x > 0.0 && x.is_finite()) => Err((field, format!("a positive number, got {x}"))),
+            other => Ok(other),
+        }
+    };
+    let non_negative = |field: &'static str, v: Option<f64>| -> Result<Option<f64>, (&'static str, String)> {
+        match v {
+            Some(x) if !(x >= 0.0 && x.is_finite()) => Err((field, format!("a number ≥ 0, got {x}"))),
+            other => Ok(other),
+        }
+    };
     if let Some(d) = positive("density", spec.density)? {
         m.density = d;
     }
@@ -120,25 +102,16 @@ pub fn resolve(spec: &MaterialSpec) -> Result<Material, (&'static str, String)> 
                 "either youngs_modulus/poisson_ratio/thickness or warp/weft/shear, not both".into(),
             ));
         }
-        let e = positive("youngs_modulus", spec.youngs_modulus)?.ok_or((
-            "youngs_modulus",
-            "a Young's modulus (Pa) with poisson_ratio and thickness".to_string(),
-        ))?;
-        let t = positive("thickness", spec.thickness)?.ok_or((
-            "thickness",
-            "a thickness (m) with youngs_modulus".to_string(),
-        ))?;
+        let e = positive("youngs_modulus", spec.youngs_modulus)?
+            .ok_or(("youngs_modulus", "a Young's modulus (Pa) with poisson_ratio and thickness".to_string()))?;
+        let t = positive("thickness", spec.thickness)?
+            .ok_or(("thickness", "a thickness (m) with youngs_modulus".to_string()))?;
         let nu = spec.poisson_ratio.unwrap_or(0.3);
         if !(0.0..0.5).contains(&nu) {
             return Err(("poisson_ratio", format!("a number in [0, 0.5), got {nu}")));
         }
         let k = e * t / (1.0 - nu * nu);
-        m.membrane = MembraneStiffness {
-            k11: k,
-            k12: nu * k,
-            k22: k,
-            k33: e * t / (2.0 * (1.0 + nu)),
-        };
+        m.membrane = MembraneStiffness { k11: k, k12: nu * k, k22: k, k33: e * t / (2.0 * (1.0 + nu)) };
     } else {
         if let Some(v) = positive("warp", spec.warp)? {
             m.membrane.k11 = v;
@@ -154,10 +127,7 @@ pub fn resolve(spec: &MaterialSpec) -> Result<Material, (&'static str, String)> 
         }
         let k = &m.membrane;
         if k.k12 * k.k12 >= k.k11 * k.k22 {
-            return Err((
-                "coupling",
-                format!("coupling² < warp·weft (got coupling {})", k.k12),
-            ));
+            return Err(("coupling", format!("coupling² < warp·weft (got coupling {})", k.k12)));
         }
     }
     if let Some(v) = non_negative("bending", spec.bending)? {

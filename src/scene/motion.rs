@@ -21,11 +21,7 @@ pub struct Transform {
 
 impl Default for Transform {
     fn default() -> Self {
-        Transform {
-            translate: Vec3::zeros(),
-            rotate: UnitQuaternion::identity(),
-            scale: 1.0,
-        }
+        Transform { translate: Vec3::zeros(), rotate: UnitQuaternion::identity(), scale: 1.0 }
     }
 }
 
@@ -43,11 +39,7 @@ impl Transform {
             }
             None => UnitQuaternion::identity(),
         };
-        Transform {
-            translate: Vec3::from(translate),
-            rotate,
-            scale,
-        }
+        Transform { translate: Vec3::from(translate), rotate, scale }
     }
 
     #[inline]
@@ -160,13 +152,9 @@ impl Motion {
             }
         };
         let spline = |get: &dyn Fn(usize) -> nalgebra::DVector<Real>| {
-            get(i) * h00
-                + tangent(i, get) * (h10 * dt)
-                + get(i + 1) * h01
-                + tangent(i + 1, get) * (h11 * dt)
+            get(i) * h00 + tangent(i, get) * (h10 * dt) + get(i + 1) * h01 + tangent(i + 1, get) * (h11 * dt)
         };
-        let tr =
-            spline(&|j| nalgebra::DVector::from_column_slice(k[j].transform.translate.as_slice()));
+        let tr = spline(&|j| nalgebra::DVector::from_column_slice(k[j].transform.translate.as_slice()));
         let sc = spline(&|j| nalgebra::DVector::from_element(1, k[j].transform.scale));
         let q = spline(&|j| nalgebra::DVector::from_column_slice(self.quats[j].as_slice()));
         let quat = Quaternion::new(q[3], q[0], q[1], q[2]);
@@ -183,19 +171,12 @@ mod tests {
     use super::*;
 
     fn key(time: f64, x: f64, deg: f64) -> Keyframe {
-        Keyframe {
-            time,
-            transform: Transform::new([x, 0.0, 0.0], Some([deg, 0.0, 0.0, 1.0]), 1.0),
-        }
+        Keyframe { time, transform: Transform::new([x, 0.0, 0.0], Some([deg, 0.0, 0.0, 1.0]), 1.0) }
     }
 
     #[test]
     fn interpolates_keys_and_holds_outside() {
-        let m = Motion::new(vec![
-            key(0.0, 0.0, 0.0),
-            key(1.0, 1.0, 90.0),
-            key(2.0, 0.0, 0.0),
-        ]);
+        let m = Motion::new(vec![key(0.0, 0.0, 0.0), key(1.0, 1.0, 90.0), key(2.0, 0.0, 0.0)]);
         assert_eq!(m.eval(-1.0), m.keys()[0].transform);
         let mid = m.eval(1.0);
         assert!((mid.translate.x - 1.0).abs() < 1e-12);

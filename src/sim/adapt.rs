@@ -93,8 +93,8 @@ impl Simulation {
         let aspect_min = params.iter().flatten().map(|p| p.aspect_min).fold(1.0, Real::min);
         let limits = RemeshLimits { size_min, aspect_min, coarsen: mode == RemeshMode::Adaptive };
         let preserved = self.preserved_nodes(&params);
-        let (finished, stats) =
-            remesh(&self.mesh, vsize, preserved, &limits).map_err(|e| SimError::Mesh(format!("remeshing failed: {e}")))?;
+        let (finished, stats) = remesh(&self.mesh, vsize, preserved, &limits)
+            .map_err(|e| SimError::Mesh(format!("remeshing failed: {e}")))?;
         if stats.splits + stats.collapses + stats.flips > 0 {
             self.adopt(finished)?;
         }

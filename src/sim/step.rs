@@ -47,8 +47,11 @@ impl Simulation {
         self.extra_pairs.sort_unstable();
         self.extra_pairs.dedup();
         let pattern = BlockPattern::new(&self.mesh, &self.rest.hinges, &self.extra_pairs);
-        self.system = ImplicitSystem::new(pattern)
-            .map_err(|source| SimError::Solve { step: self.steps, time: self.time, source })?;
+        self.system = ImplicitSystem::new(pattern).map_err(|source| SimError::Solve {
+            step: self.steps,
+            time: self.time,
+            source,
+        })?;
         Ok(())
     }
 

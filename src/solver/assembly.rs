@@ -114,21 +114,15 @@ impl ImplicitSystem {
         let energy = self.assemble(inp);
         let t1 = std::time::Instant::now();
         let blocks = &self.blocks;
-        self.values
-            .par_iter_mut()
-            .zip(self.chol.value_sources().par_iter())
-            .for_each(|(v, &s)| {
-                let b = &blocks[s / 9];
-                *v = b[((s % 9) / 3, s % 3)];
-            });
+        self.values.par_iter_mut().zip(self.chol.value_sources().par_iter()).for_each(|(v, &s)| {
+            let b = &blocks[s / 9];
+            *v = b[((s % 9) / 3, s % 3)];
+        });
         self.chol.factor(&self.values)?;
         let t2 = std::time::Instant::now();
         let mut x: Vec<f64> = self.rhs.iter().flat_map(|r| [r.x, r.y, r.z]).collect();
         self.chol.solve(&mut x);
-        let dv = x
-            .chunks_exact(3)
-            .map(|c| Vec3::new(c[0], c[1], c[2]))
-            .collect();
+        let dv = x.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
         let t3 = std::time::Instant::now();
         Ok(StepOutput {
             dv,
@@ -153,28 +147,18 @@ impl ImplicitSystem {
         let mut energy = 0.0;
         let nf = mesh.faces.len();
         for start in (0..nf).step_by(CHUNK) {
-            let locals: Vec<Local<3, 9>> = (start..(start + CHUNK).min(nf))
-                .into_par_iter()
-                .map(|f| face_local(inp, f))
-                .collect();
+            let locals: Vec<Local<3, 9>> =
+                (start..(start + CHUNK).min(nf)).into_par_iter().map(|f| face_local(inp, f)).collect();
             for (k, local) in locals.iter().enumerate() {
                 let f = start + k;
                 energy += local.energy;
-                scatter(
-                    &mut self.blocks,
-                    &mut self.rhs,
-                    &mesh.face_nodes(f),
-                    &self.pattern.face_slots[f],
-                    local,
-                );
+                scatter(&mut self.blocks, &mut self.rhs, &mesh.face_nodes(f), &self.pattern.face_slots[f], local);
             }
         }
         let nh = inp.rest.hinges.len();
         for start in (0..nh).step_by(CHUNK) {
-            let locals: Vec<Local<4, 12>> = (start..(start + CHUNK).min(nh))
-                .into_par_iter()
-                .map(|k| hinge_local(inp, k))
-                .collect();
+            let locals: Vec<Local<4, 12>> =
+                (start..(start + CHUNK).min(nh)).into_par_iter().map(|k| hinge_local(inp, k)).collect();
             for (j, local) in locals.iter().enumerate() {
                 let k = start + j;
                 energy += local.energy;
@@ -205,7 +189,11 @@ impl ImplicitSystem {
             }
             let vl = Vec12::from_fn(|r, _| {
                 let i = c.nodes[r / 3];
-                if i < n { inp.mesh.nodes[i].v[r % 3] } else { 0.0 }
+                if i < n {
+                    inp.mesh.nodes[i].v[r % 3]
+                } else {
+                    0.0
+                }
             });
             let rhs = -h * grad - h * h * (hess * vl);
             for a in 0..4 {
@@ -233,12 +221,7 @@ impl ImplicitSystem {
     /// Dirichlet elimination: a pinned node's Δv is prescribed; its coupling moves to the right
     /// side of its neighbours' rows and its own row becomes the identity.
     fn eliminate_pinned(&mut self, inp: &StepInput) {
-        let dv: Vec<Option<Vec3>> = inp
-            .pinned
-            .iter()
-            .zip(&inp.mesh.nodes)
-            .map(|(p, n)| p.map(|v| v - n.v))
-            .collect();
+        let dv: Vec<Option<Vec3>> = inp.pinned.iter().zip(&inp.mesh.nodes).map(|(p, n)| p.map(|v| v - n.v)).collect();
         if dv.iter().all(Option::is_none) {
             return;
         }

@@ -35,13 +35,7 @@ impl ImplicitSystem {
         let blocks = vec![Mat3::zeros(); pattern.num_blocks()];
         let rhs = vec![Vec3::zeros(); pattern.nodes];
         let values = vec![0.0; csc.row_idx.len()];
-        Ok(ImplicitSystem {
-            pattern,
-            chol,
-            blocks,
-            rhs,
-            values,
-        })
+        Ok(ImplicitSystem { pattern, chol, blocks, rhs, values })
     }
 
     /// Number of nonzeros of the Cholesky factor.

@@ -52,16 +52,8 @@ impl BlockPattern {
             rows.extend_from_slice(col);
         }
         col_start.push(rows.len());
-        let mut p = BlockPattern {
-            nodes: n,
-            col_start,
-            rows,
-            face_slots: Vec::new(),
-            hinge_slots: Vec::new(),
-        };
-        p.face_slots = (0..mesh.faces.len())
-            .map(|f| p.slots(&mesh.face_nodes(f)))
-            .collect();
+        let mut p = BlockPattern { nodes: n, col_start, rows, face_slots: Vec::new(), hinge_slots: Vec::new() };
+        p.face_slots = (0..mesh.faces.len()).map(|f| p.slots(&mesh.face_nodes(f))).collect();
         p.hinge_slots = hinges.iter().map(|h| p.slots(&h.nodes)).collect();
         p
     }
@@ -117,11 +109,6 @@ impl ScalarCsc {
                 col_ptr.push(row_idx.len());
             }
         }
-        ScalarCsc {
-            dim: 3 * p.nodes,
-            col_ptr,
-            row_idx,
-            src,
-        }
+        ScalarCsc { dim: 3 * p.nodes, col_ptr, row_idx, src }
     }
 }
