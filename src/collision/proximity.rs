@@ -92,6 +92,62 @@ pub fn edge_edge_contact(nodes: [usize; 4], x: &[Vec3; 4], thickness: Real, stif
     Some(Contact { nodes, w, n, thickness, stiffness })
 }
 
+/// An obstacle vertex `x[0]` against a cloth face `x[1..4]`. The cloth belongs outside the
+/// obstacle, so the normal is the face normal on the side of the obstacle's outward normal
+/// `outward` at the vertex (pointing from the cloth into the obstacle), whichever side the vertex
+/// is on at the end of the step: a vertex that passed through the face within the step pushes
+/// the face back out, not further in. Counts within the thickness in front and within `reach`
+/// (thickness plus the obstacle's travel) behind.
+pub fn obstacle_vertex_contact(
+    nodes: [usize; 4],
+    x: &[Vec3; 4],
+    thickness: Real,
+    stiffness: Real,
+    reach: Real,
+    outward: &Vec3,
+) -> Option<Contact> {
+    let cl = closest_point_triangle(&x[0], &x[1], &x[2], &x[3]);
+    if !cl.interior || cl.dist >= reach {
+        return None;
+    }
+    let face = (x[2] - x[1]).cross(&(x[3] - x[1])).try_normalize(0.0)?;
+    let n = if face.dot(outward) > 0.0 { -face } else { face };
+    let w = [1.0, -cl.bary[0], -cl.bary[1], -cl.bary[2]];
+    oriented_within(Contact { nodes, w, n, thickness, stiffness }, x, reach)
+}
+
+/// A cloth edge `x[0]`–`x[1]` against an obstacle edge `x[2]`–`x[3]` whose outward normal is
+/// `outward`: as `edge_edge_contact`, with the normal oriented out of the obstacle (see
+/// `obstacle_vertex_contact`).
+pub fn obstacle_edge_contact(
+    nodes: [usize; 4],
+    x: &[Vec3; 4],
+    thickness: Real,
+    stiffness: Real,
+    reach: Real,
+    outward: &Vec3,
+) -> Option<Contact> {
+    let sc = closest_segments(&x[0], &x[1], &x[2], &x[3]);
+    let inner = |s: Real| s > END_TOLERANCE && s < 1.0 - END_TOLERANCE;
+    if sc.dist >= reach || !inner(sc.s) || !inner(sc.t) {
+        return None;
+    }
+    let w = [1.0 - sc.s, sc.s, -(1.0 - sc.t), -sc.t];
+    let sep: Vec3 = x.iter().zip(&w).map(|(x, w)| x * *w).sum();
+    let (ea, eb) = (x[1] - x[0], x[3] - x[2]);
+    let n =
+        ea.cross(&eb).try_normalize(1e-12).or_else(|| sep.try_normalize(0.0)).unwrap_or_else(|| any_perpendicular(&ea));
+    let n = if n.dot(outward) < 0.0 { -n } else { n };
+    oriented_within(Contact { nodes, w, n, thickness, stiffness }, x, reach)
+}
+
+/// `c` if its signed separation n · Σ wᵢ xᵢ lies in (−reach, thickness): closer than the
+/// thickness in front, or behind by less than `reach`.
+fn oriented_within(c: Contact, x: &[Vec3; 4], reach: Real) -> Option<Contact> {
+    let s = c.gap(x) + c.thickness;
+    (s < c.thickness && s > -reach).then_some(c)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -11,7 +11,7 @@ use super::ccd::{edge_edge_ccd, vertex_face_ccd, Impact, CCD_TOLERANCE};
 use super::geometry::closest_point_triangle;
 use super::impact_zones::{resolve_zone, ZoneConstraint, ZoneState};
 use super::obstacle::ObstacleBody;
-use super::proximity::{edge_edge_contact, node_face_contact, Contact};
+use super::proximity::{edge_edge_contact, node_face_contact, obstacle_edge_contact, obstacle_vertex_contact, Contact};
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
 use crate::scene::CollisionParams;
@@ -93,13 +93,24 @@ impl CollisionWorld {
 
     /// Repulsion contacts at the start of a step: cloth against obstacles (at the end of the
     /// step, so an obstacle moving in is felt) and, with self-collision on, cloth against cloth.
+    ///
+    /// An obstacle can move farther in one step than the thickness (the sphere scene sweeps
+    /// 5–10 mm per step through a sheet 5 mm thick): cloth it sweeps over during the step lies
+    /// behind its end-of-step surface, deeper than the thickness. Such cloth still gets a contact,
+    /// pushing it out along the obstacle's outward normal: the search reaches the obstacle's
+    /// travel over the step beyond the thickness. ARCSim searches a fixed 2 × thickness
+    /// (`proximity.cpp`, `dmin`); without this the implicit solve carries hundreds of nodes into
+    /// the obstacle and leaves them all to the impact zones.
     pub fn proximity(&mut self, mesh: &Mesh, contact_area: &[Real]) -> Vec<Contact> {
         let th = self.params.thickness;
         let n = mesh.nodes.len();
         let x: Vec<Vec3> = mesh.positions();
-        let iv = Interval { cloth0: &x, cloth1: &x, obs0: &self.obs_x1, obs1: &self.obs_x1 };
+        // Obstacle boxes span the step, so cloth the obstacle sweeps over is a candidate.
+        let iv = Interval { cloth0: &x, cloth1: &x, obs0: &self.obs_x0, obs1: &self.obs_x1 };
         let keys = self.broad.candidates(mesh, &self.obs_tris, &self.obs_edges, &iv, th, self.params.self_collision);
         let pos = |i: usize| if i < n { x[i] } else { self.obs_x1[i - n] };
+        let travel: Vec<Real> = self.obs_x0.iter().zip(&self.obs_x1).map(|(a, b)| (b - a).norm()).collect();
+        let outward = self.obstacle_vertex_normals();
         let k_area = self.params.stiffness;
         let mut contacts: Vec<Contact> = keys
             .par_iter()
@@ -107,9 +118,14 @@ impl CollisionWorld {
                 let xs = nodes.map(pos);
                 let area = nodes.iter().filter(|&&i| i < n).map(|&i| contact_area[i]).fold(0.0, Real::max);
                 let k = k_area * area;
+                let obstacle = || nodes.iter().filter(|&&i| i >= n).map(|&i| i - n);
+                let reach = th + obstacle().map(|i| travel[i]).fold(0.0, Real::max);
+                let out: Vec3 = obstacle().map(|i| outward[i]).sum();
                 match kind {
-                    VF if nodes[0] < n && nodes[1] >= n => self.obstacle_face_contact(nodes, &xs, k),
+                    VF if nodes[0] < n && nodes[1] >= n => self.obstacle_face_contact(nodes, &xs, k, reach),
+                    VF if nodes[0] >= n => obstacle_vertex_contact(nodes, &xs, th, k, reach, &out),
                     VF => node_face_contact(nodes, &xs, th, k),
+                    _ if nodes[2] >= n => obstacle_edge_contact(nodes, &xs, th, k, reach, &out),
                     _ => edge_edge_contact(nodes, &xs, th, k),
                 }
             })
@@ -133,23 +149,42 @@ impl CollisionWorld {
         contacts
     }
 
+    /// Outward unit normals of the obstacle vertices at the end of the step (area-weighted
+    /// face normals).
+    fn obstacle_vertex_normals(&self) -> Vec<Vec3> {
+        let x = &self.obs_x1;
+        let mut normals = vec![Vec3::zeros(); x.len()];
+        for t in &self.obs_tris {
+            let area_normal = (x[t[1]] - x[t[0]]).cross(&(x[t[2]] - x[t[0]]));
+            for &i in t {
+                normals[i] += area_normal;
+            }
+        }
+        normals.iter().map(|v| v.try_normalize(0.0).unwrap_or_else(Vec3::zeros)).collect()
+    }
+
     /// Cloth node against an obstacle face: the obstacle's outward normal decides the side, so a
-    /// node that is slightly inside is pushed out, not further in. Behind the face only counts
-    /// within the thickness too: a long face's bounding box reaches far, and a node in front of
-    /// a slender obstacle (a leg) is also "behind" the faces on its far side.
-    fn obstacle_face_contact(&self, nodes: [usize; 4], x: &[Vec3; 4], k: Real) -> Option<Contact> {
+    /// node that is slightly inside is pushed out, not further in. In front of the face a node
+    /// counts within the thickness; behind it, within `reach` (thickness plus the obstacle's
+    /// travel over the step), and only over the face's interior: a long face's bounding box
+    /// reaches far, and a node in front of a slender obstacle (a leg) is also "behind" the faces
+    /// on its far side.
+    fn obstacle_face_contact(&self, nodes: [usize; 4], x: &[Vec3; 4], k: Real, reach: Real) -> Option<Contact> {
         let th = self.params.thickness;
         let cl = closest_point_triangle(&x[0], &x[1], &x[2], &x[3]);
         let outward = (x[2] - x[1]).cross(&(x[3] - x[1])).try_normalize(0.0)?;
         let side = (x[0] - cl.point).dot(&outward);
-        if cl.dist >= th {
+        if cl.dist >= reach || (side >= 0.0 && cl.dist >= th) {
             return None;
         }
-        if side < 0.0 && !cl.interior {
-            // Behind the face but beside it: another face of the obstacle is nearer.
+        // Behind the face but beside it: another face of the obstacle is nearer. (Behind an
+        // edge or a vertex of the face, within rounding, still counts: the node is under the
+        // face's boundary, where no neighbouring face is strictly nearer.)
+        let beside = (cl.dist * cl.dist - side * side).max(0.0).sqrt();
+        if side < 0.0 && !cl.interior && beside > 1e-3 * th {
             return None;
         }
-        let n = if cl.interior || cl.dist == 0.0 { outward } else { (x[0] - cl.point) / cl.dist };
+        let n = if cl.interior || side < 0.0 || cl.dist == 0.0 { outward } else { (x[0] - cl.point) / cl.dist };
         Some(Contact { nodes, w: [1.0, -cl.bary[0], -cl.bary[1], -cl.bary[2]], n, thickness: th, stiffness: k })
     }
 
@@ -170,6 +205,7 @@ impl CollisionWorld {
             |i: usize| if i < n { x0[i] } else { self.obs_x0[i - n] },
             |i: usize| if i < n { x1[i] } else { self.obs_x1[i - n] },
         );
+        let outward = self.obstacle_vertex_normals();
         keys.par_iter()
             .filter_map(|&(kind, nodes)| {
                 let (a, b) = (nodes.map(p0), nodes.map(p1));
@@ -178,7 +214,11 @@ impl CollisionWorld {
                 } else {
                     edge_edge_ccd(&a, &b, CCD_TOLERANCE)
                 };
-                hit.map(|imp| (nodes, imp))
+                let imp = hit.map(|imp| outside_obstacle(imp, &nodes, n, &outward))?;
+                // Cloth leaving an obstacle it was inside of has nothing to be stopped.
+                let obstacle = nodes.iter().any(|&i| i >= n);
+                let sep = |x: &[Vec3; 4]| (0..4).map(|j| imp.w[j] * imp.n.dot(&x[j])).sum::<Real>();
+                (!(obstacle && sep(&a) < 0.0 && sep(&b) >= 0.0)).then_some((nodes, imp))
             })
             .collect()
     }
@@ -210,14 +250,14 @@ impl CollisionWorld {
                 return;
             }
             counters.impacts += impacts.len();
-            // Constraints accumulate over iterations (Harmon et al. 2008, §4): a zone keeps
-            // every impact it has met; a repeated impact of the same primitives replaces its
-            // older linearisation.
+            // Constraints accumulate over iterations (Harmon et al. 2008, §4; ARCSim's
+            // `add_impacts`): a zone keeps every impact it has met, including earlier
+            // linearisations of the same primitives. Replacing those instead lets the projection
+            // satisfy one linearisation at a time and cycle between two until the cap.
             for (nodes, imp) in impacts {
                 let c = ZoneConstraint { nodes, w: imp.w, n: imp.n, delta };
-                match constraints.iter_mut().find(|old| old.nodes == nodes) {
-                    Some(old) => *old = c,
-                    None => constraints.push(c),
+                if !constraints.contains(&c) {
+                    constraints.push(c);
                 }
             }
             // Zones: connected components of cloth nodes tied by constraints.
@@ -257,6 +297,30 @@ impl CollisionWorld {
             counters.cap_hits += 1;
         }
     }
+}
+
+/// Against an obstacle, the side the cloth must end on is known: outside (obstacles are closed
+/// and their faces point out). CCD orients an impact's normal by the side at the start of the
+/// step, which preserves any penetration already there: a remesh that flips or collapses an edge
+/// over a convex obstacle vertex leaves it poking a few µm through the new face, and the zone
+/// projection would then hold it through. So the normal of a cloth–obstacle impact is oriented
+/// out of the obstacle (the separation Σ wᵢ xᵢ runs from the obstacle to the cloth when the
+/// obstacle's weights are negative), which undoes such a penetration instead. Bridson et al.
+/// 2002 (§7) and ARCSim's `separateobs` likewise separate cloth from obstacles by the
+/// obstacle's inside.
+fn outside_obstacle(mut imp: Impact, nodes: &[usize; 4], n: usize, outward: &[Vec3]) -> Impact {
+    let (mut dir, mut w_obstacle) = (Vec3::zeros(), 0.0);
+    for j in 0..4 {
+        if nodes[j] >= n {
+            dir += outward[nodes[j] - n];
+            w_obstacle += imp.w[j];
+        }
+    }
+    // Cloth minus obstacle (obstacle weights negative) should point along `dir`.
+    if w_obstacle != 0.0 && imp.n.dot(&dir) * w_obstacle > 0.0 {
+        imp.n = -imp.n;
+    }
+    imp
 }
 
 struct UnionFind {
