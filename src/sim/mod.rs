@@ -44,6 +44,10 @@ pub struct Simulation {
     rest_angles: Vec<Real>,
     rest: RestState,
     system: ImplicitSystem,
+    /// The pattern of a remeshed cloth, analysed only at the next step (`ensure_pattern`): that
+    /// step's self contacts usually extend it, and each analysis is a fill-reducing ordering and
+    /// a symbolic factorisation.
+    pending_pattern: Option<BlockPattern>,
     /// Cloth–cloth node pairs added to the base pattern for self contacts.
     extra_pairs: Vec<(usize, usize)>,
     /// Present when the scene has obstacles or self-collision.
@@ -88,6 +92,7 @@ impl Simulation {
             rest_angles,
             rest,
             system,
+            pending_pattern: None,
             extra_pairs: Vec::new(),
             collisions,
             node_area,
