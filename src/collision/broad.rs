@@ -59,7 +59,7 @@ fn sorted_edge(a: usize, b: usize) -> [usize; 2] {
 }
 
 /// A candidate found for query primitive `.0` (the index the candidate list is ordered by).
-type Found = (u32, Candidate);
+type Found<T> = (u32, Candidate, T);
 
 impl BroadPhase {
     /// All candidates whose boxes, the query's inflated by `pad`, overlap over the interval.
@@ -78,6 +78,29 @@ impl BroadPhase {
         pad: Real,
         self_collision: bool,
     ) -> Vec<Candidate> {
+        let found = self.search(mesh, obs_tris, obs_edges, iv, pad, self_collision, |_| Some(()));
+        found.into_iter().map(|(c, ())| c).collect()
+    }
+
+    /// `candidates` with the narrow phase run where each candidate is found: `narrow(c)`'s
+    /// results that are `Some`, in the candidates' order, without building the candidate
+    /// list.
+    #[allow(clippy::too_many_arguments)]
+    pub fn search<T: Send>(
+        &mut self,
+        mesh: &Mesh,
+        obs_tris: &[[usize; 3]],
+        obs_edges: &[[usize; 2]],
+        iv: &Interval,
+        pad: Real,
+        self_collision: bool,
+        narrow: impl Fn(Candidate) -> Option<T> + Sync,
+    ) -> Vec<(Candidate, T)> {
+        let keep = |q: usize, c: Candidate, v: &mut Vec<Found<T>>| {
+            if let Some(t) = narrow(c) {
+                v.push((q as u32, c, t));
+            }
+        };
         let n = mesh.nodes.len();
         let faces: Vec<[usize; 3]> = (0..mesh.faces.len()).map(|f| mesh.face_nodes(f)).collect();
         let edges: Vec<[usize; 2]> = mesh.edges.iter().map(|e| sorted_edge(e.n[0].idx(), e.n[1].idx())).collect();
@@ -91,7 +114,7 @@ impl BroadPhase {
         // bounds every inflated leaf box below it (rounding is monotone).
         let near_padded = |a: &Aabb, b: &Aabb| a.inflate(pad).overlaps(b);
         let near = |a: &Aabb, b: &Aabb| a.overlaps(b);
-        let mut out: Vec<Candidate> = Vec::new();
+        let mut out: Vec<(Candidate, T)> = Vec::new();
 
         if !obs_tris.is_empty() {
             let of_boxes: Vec<Aabb> = obs_tris.par_iter().map(|t| iv.obs_box(t)).collect();
@@ -102,27 +125,27 @@ impl BroadPhase {
             let oe = refit(&mut self.obs_edges, &oe_boxes);
             let on = refit(&mut self.obs_nodes, &on_boxes);
             // Cloth node vs obstacle face.
-            let found = cn.overlapping(&of, false, near, |p, t, v: &mut Vec<Found>| {
+            let found = cn.overlapping(&of, false, near, |p, t, v: &mut Vec<Found<T>>| {
                 if of_boxes[t].overlaps(&node_boxes[p]) {
                     let o = obs_tris[t];
-                    v.push((p as u32, (VF, [p, o[0] + n, o[1] + n, o[2] + n])));
+                    keep(p, (VF, [p, o[0] + n, o[1] + n, o[2] + n]), v);
                 }
             });
             out.extend(by_query(found, n));
             // Obstacle vertex vs cloth face.
-            let found = on.overlapping(&cf, false, near, |k, f, v: &mut Vec<Found>| {
+            let found = on.overlapping(&cf, false, near, |k, f, v: &mut Vec<Found<T>>| {
                 if face_boxes[f].overlaps(&on_boxes[k]) {
                     let c = faces[f];
-                    v.push((k as u32, (VF, [k + n, c[0], c[1], c[2]])));
+                    keep(k, (VF, [k + n, c[0], c[1], c[2]]), v);
                 }
             });
             out.extend(by_query(found, on_boxes.len()));
             // Cloth edge vs obstacle edge.
-            let found = ce.overlapping(&oe, false, near_padded, |e, k, v: &mut Vec<Found>| {
+            let found = ce.overlapping(&oe, false, near_padded, |e, k, v: &mut Vec<Found<T>>| {
                 if oe_boxes[k].overlaps(&edge_boxes[e].inflate(pad)) {
                     let [a, b] = edges[e];
                     let [c, d] = obs_edges[k];
-                    v.push((e as u32, (EE, [a, b, c + n, d + n])));
+                    keep(e, (EE, [a, b, c + n, d + n]), v);
                 }
             });
             out.extend(by_query(found, edges.len()));
@@ -132,10 +155,10 @@ impl BroadPhase {
         }
         if self_collision {
             // Cloth node vs cloth face not containing it.
-            let found = cn.overlapping(&cf, false, near, |p, f, v: &mut Vec<Found>| {
+            let found = cn.overlapping(&cf, false, near, |p, f, v: &mut Vec<Found<T>>| {
                 let c = faces[f];
                 if face_boxes[f].overlaps(&node_boxes[p]) && !c.contains(&p) {
-                    v.push((p as u32, (VF, [p, c[0], c[1], c[2]])));
+                    keep(p, (VF, [p, c[0], c[1], c[2]]), v);
                 }
             });
             out.extend(by_query(found, n));
@@ -143,11 +166,11 @@ impl BroadPhase {
             // index), no shared node. The tree meets a pair from either side, so its nodes are
             // near when either one's inflated box overlaps the other.
             let near_either = |a: &Aabb, b: &Aabb| near_padded(a, b) || near_padded(b, a);
-            let found = ce.overlapping(&ce, true, near_either, |p, q, v: &mut Vec<Found>| {
+            let found = ce.overlapping(&ce, true, near_either, |p, q, v: &mut Vec<Found<T>>| {
                 let (e, g) = (p.min(q), p.max(q));
                 let ([a, b], [c, d]) = (edges[e], edges[g]);
                 if a != c && a != d && b != c && b != d && edge_boxes[g].overlaps(&edge_boxes[e].inflate(pad)) {
-                    v.push((e as u32, (EE, [a, b, c, d])));
+                    keep(e, (EE, [a, b, c, d]), v);
                 }
             });
             out.extend(by_query(found, edges.len()));
@@ -161,23 +184,29 @@ impl BroadPhase {
 
 /// Orders candidates by query primitive (a counting sort over `0..queries`), each query's
 /// candidates sorted.
-fn by_query(found: Vec<Found>, queries: usize) -> Vec<Candidate> {
+fn by_query<T>(found: Vec<Found<T>>, queries: usize) -> Vec<(Candidate, T)> {
     let mut start = vec![0usize; queries + 1];
-    for &(q, _) in &found {
+    for &(q, ..) in &found {
         start[q as usize + 1] += 1;
     }
     for q in 0..queries {
         start[q + 1] += start[q];
     }
+    let mut slot = vec![0usize; found.len()];
     let mut next = start.clone();
-    let mut out = vec![(VF, [0; 4]); found.len()];
-    for (q, c) in found {
-        out[next[q as usize]] = c;
+    for (k, &(q, ..)) in found.iter().enumerate() {
+        slot[k] = next[q as usize];
         next[q as usize] += 1;
     }
+    let mut placed: Vec<Option<(Candidate, T)>> = (0..found.len()).map(|_| None).collect();
+    for (k, (_, c, t)) in found.into_iter().enumerate() {
+        placed[slot[k]] = Some((c, t));
+    }
+    let mut out: Vec<(Candidate, T)> = placed.into_iter().map(|x| x.expect("every slot is filled once")).collect();
     for q in 0..queries {
         if start[q + 1] - start[q] > 1 {
-            out[start[q]..start[q + 1]].sort_unstable();
+            // Equal candidates (a duplicated primitive) carry equal results.
+            out[start[q]..start[q + 1]].sort_unstable_by(|a, b| a.0.cmp(&b.0));
         }
     }
     out
