@@ -8,16 +8,13 @@
 
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
-use faer::perm::PermRef;
-use faer::sparse::linalg::amd;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, simplicial, supernodal, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
-    SymmetricOrdering,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 
-use super::pattern::{BlockPattern, ScalarCsc};
+use super::pattern::ScalarCsc;
 
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum SolveError {
@@ -41,19 +38,11 @@ pub struct Cholesky {
 }
 
 impl Cholesky {
-    /// Analyses the pattern: a fill-reducing AMD ordering of the nodes (`blocks`, the 3×3-block
-    /// pattern `csc` expands), each node's three coordinates kept together, then the
-    /// elimination tree and supernodes of the scalar pattern in that order. Ordering the node
-    /// graph instead of the scalar one gives the same kind of order (a node's coordinates are
-    /// indistinguishable to AMD, which merges them into one supervariable anyway) on 1/9 of the
-    /// entries; with self contacts the pattern is analysed about once per step.
-    pub fn analyse(csc: &ScalarCsc, blocks: &BlockPattern) -> Result<Self, SolveError> {
-        let (fwd, inv) = node_order(blocks)?;
-        let perm = PermRef::new_checked(&fwd, &inv, csc.dim);
+    /// Analyses the pattern (fill-reducing AMD ordering, elimination tree, supernodes).
+    pub fn analyse(csc: &ScalarCsc) -> Result<Self, SolveError> {
         let sym = SymbolicSparseColMatRef::new_checked(csc.dim, csc.dim, &csc.col_ptr, None, &csc.row_idx);
-        let symbolic =
-            factorize_symbolic_cholesky(sym, Side::Lower, SymmetricOrdering::Custom(perm), Default::default())
-                .map_err(|e| SolveError::Symbolic(format!("{e:?}")))?;
+        let symbolic = factorize_symbolic_cholesky(sym, Side::Lower, Default::default(), Default::default())
+            .map_err(|e| SolveError::Symbolic(format!("{e:?}")))?;
         Ok(Self::with_symbolic(csc, symbolic))
     }
 
@@ -117,18 +106,6 @@ impl Cholesky {
     pub fn factor_nnz(&self) -> usize {
         self.symbolic.len_val()
     }
-}
-
-/// AMD on the node graph, expanded to coordinates: (forward, inverse) scalar permutations.
-fn node_order(blocks: &BlockPattern) -> Result<(Vec<usize>, Vec<usize>), SolveError> {
-    let n = blocks.nodes;
-    let sym = SymbolicSparseColMatRef::new_checked(n, n, &blocks.col_start, None, &blocks.rows);
-    let (mut fwd, mut inv) = (vec![0usize; n], vec![0usize; n]);
-    let req = amd::order_scratch::<usize>(n, blocks.rows.len());
-    amd::order(&mut fwd, &mut inv, sym, Default::default(), MemStack::new(&mut MemBuffer::new(req)))
-        .map_err(|e| SolveError::Symbolic(format!("{e:?}")))?;
-    let expand = |p: &[usize]| p.iter().flat_map(|&i| [3 * i, 3 * i + 1, 3 * i + 2]).collect::<Vec<_>>();
-    Ok((expand(&fwd), expand(&inv)))
 }
 
 /// P A Pᵀ's pattern exactly as faer's `factorize_numeric_llt` lays it out (a counting sort

@@ -31,7 +31,7 @@ impl ImplicitSystem {
     /// Builds the pattern of a mesh whose hinges are `hinges` and analyses it.
     pub fn new(pattern: BlockPattern) -> Result<Self, SolveError> {
         let csc = ScalarCsc::new(&pattern);
-        let chol = Cholesky::analyse(&csc, &pattern)?;
+        let chol = Cholesky::analyse(&csc)?;
         let blocks = vec![Mat3::zeros(); pattern.num_blocks()];
         let rhs = vec![Vec3::zeros(); pattern.nodes];
         let values = vec![0.0; csc.row_idx.len()];
