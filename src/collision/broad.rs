@@ -206,7 +206,7 @@ fn by_query<T>(found: Vec<Found<T>>, queries: usize) -> Vec<(Candidate, T)> {
     for q in 0..queries {
         if start[q + 1] - start[q] > 1 {
             // Equal candidates (a duplicated primitive) carry equal results.
-            out[start[q]..start[q + 1]].sort_unstable_by(|a, b| a.0.cmp(&b.0));
+            out[start[q]..start[q + 1]].sort_unstable_by_key(|x| x.0);
         }
     }
     out
