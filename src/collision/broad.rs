@@ -1,7 +1,7 @@
 //! Broad phase: candidate vertex–face and edge–edge pairs from bounding-volume hierarchies over
-//! cloth faces and edges and obstacle faces and edges (refit every call, rebuilt when a count
-//! changes). Each primitive queries the trees once, in parallel; results are concatenated in
-//! query order, so the candidate list is the same for any thread count.
+//! cloth nodes, faces and edges and obstacle vertices, faces and edges (refit every call, rebuilt
+//! when a count changes), searched tree against tree in parallel; results are put in query order,
+//! so the candidate list is the same for any thread count.
 
 use rayon::prelude::*;
 
@@ -38,8 +38,10 @@ impl Interval<'_> {
 pub struct BroadPhase {
     cloth_faces: Option<Bvh>,
     cloth_edges: Option<Bvh>,
+    cloth_nodes: Option<Bvh>,
     obs_faces: Option<Bvh>,
     obs_edges: Option<Bvh>,
+    obs_nodes: Option<Bvh>,
 }
 
 fn refit(slot: &mut Option<Bvh>, boxes: &[Aabb]) -> Bvh {
@@ -56,8 +58,17 @@ fn sorted_edge(a: usize, b: usize) -> [usize; 2] {
     [a.min(b), a.max(b)]
 }
 
+/// A candidate found for query primitive `.0` (the index the candidate list is ordered by).
+type Found<T> = (u32, Candidate, T);
+
 impl BroadPhase {
     /// All candidates whose boxes, the query's inflated by `pad`, overlap over the interval.
+    ///
+    /// The list is ordered by query primitive (cloth node, obstacle vertex, cloth edge), each
+    /// query's candidates sorted: the order a tree finds them in depends on the tree's shape,
+    /// hence on the positions it was built at, and a resumed run rebuilds its trees elsewhere.
+    /// The trees are searched against each other (`Bvh::overlapping`), and every reported pair
+    /// passes the same box test a per-query search would apply, so the list is the same.
     pub fn candidates(
         &mut self,
         mesh: &Mesh,
@@ -67,6 +78,29 @@ impl BroadPhase {
         pad: Real,
         self_collision: bool,
     ) -> Vec<Candidate> {
+        let found = self.search(mesh, obs_tris, obs_edges, iv, pad, self_collision, |_| Some(()));
+        found.into_iter().map(|(c, ())| c).collect()
+    }
+
+    /// `candidates` with the narrow phase run where each candidate is found: `narrow(c)`'s
+    /// results that are `Some`, in the candidates' order, without building the candidate
+    /// list.
+    #[allow(clippy::too_many_arguments)]
+    pub fn search<T: Send>(
+        &mut self,
+        mesh: &Mesh,
+        obs_tris: &[[usize; 3]],
+        obs_edges: &[[usize; 2]],
+        iv: &Interval,
+        pad: Real,
+        self_collision: bool,
+        narrow: impl Fn(Candidate) -> Option<T> + Sync,
+    ) -> Vec<(Candidate, T)> {
+        let keep = |q: usize, c: Candidate, v: &mut Vec<Found<T>>| {
+            if let Some(t) = narrow(c) {
+                v.push((q as u32, c, t));
+            }
+        };
         let n = mesh.nodes.len();
         let faces: Vec<[usize; 3]> = (0..mesh.faces.len()).map(|f| mesh.face_nodes(f)).collect();
         let edges: Vec<[usize; 2]> = mesh.edges.iter().map(|e| sorted_edge(e.n[0].idx(), e.n[1].idx())).collect();
@@ -75,79 +109,212 @@ impl BroadPhase {
         let node_boxes: Vec<Aabb> = (0..n).into_par_iter().map(|i| iv.cloth_box(&[i]).inflate(pad)).collect();
         let cf = refit(&mut self.cloth_faces, &face_boxes);
         let ce = refit(&mut self.cloth_edges, &edge_boxes);
-        let mut out: Vec<Candidate> = Vec::new();
+        let cn = refit(&mut self.cloth_nodes, &node_boxes);
+        // A query edge's box is its edge box inflated by `pad`; inflating a node's box instead
+        // bounds every inflated leaf box below it (rounding is monotone).
+        let near_padded = |a: &Aabb, b: &Aabb| a.inflate(pad).overlaps(b);
+        let near = |a: &Aabb, b: &Aabb| a.overlaps(b);
+        let mut out: Vec<(Candidate, T)> = Vec::new();
 
         if !obs_tris.is_empty() {
             let of_boxes: Vec<Aabb> = obs_tris.par_iter().map(|t| iv.obs_box(t)).collect();
             let oe_boxes: Vec<Aabb> = obs_edges.par_iter().map(|e| iv.obs_box(e)).collect();
+            let on_boxes: Vec<Aabb> =
+                (0..iv.obs1.len()).into_par_iter().map(|k| iv.obs_box(&[k]).inflate(pad)).collect();
             let of = refit(&mut self.obs_faces, &of_boxes);
             let oe = refit(&mut self.obs_edges, &oe_boxes);
+            let on = refit(&mut self.obs_nodes, &on_boxes);
             // Cloth node vs obstacle face.
-            out.extend(collect(0..n, |p, v| {
-                of.query(&node_boxes[p], &of_boxes, |t| {
+            let found = cn.overlapping(&of, false, near, |p, t, v: &mut Vec<Found<T>>| {
+                if of_boxes[t].overlaps(&node_boxes[p]) {
                     let o = obs_tris[t];
-                    v.push((VF, [p, o[0] + n, o[1] + n, o[2] + n]));
-                })
-            }));
+                    keep(p, (VF, [p, o[0] + n, o[1] + n, o[2] + n]), v);
+                }
+            });
+            out.extend(by_query(found, n));
             // Obstacle vertex vs cloth face.
-            out.extend(collect(0..iv.obs1.len(), |k, v| {
-                let q = iv.obs_box(&[k]).inflate(pad);
-                cf.query(&q, &face_boxes, |f| {
+            let found = on.overlapping(&cf, false, near, |k, f, v: &mut Vec<Found<T>>| {
+                if face_boxes[f].overlaps(&on_boxes[k]) {
                     let c = faces[f];
-                    v.push((VF, [k + n, c[0], c[1], c[2]]));
-                })
-            }));
+                    keep(k, (VF, [k + n, c[0], c[1], c[2]]), v);
+                }
+            });
+            out.extend(by_query(found, on_boxes.len()));
             // Cloth edge vs obstacle edge.
-            out.extend(collect(0..edges.len(), |e, v| {
-                oe.query(&edge_boxes[e].inflate(pad), &oe_boxes, |k| {
+            let found = ce.overlapping(&oe, false, near_padded, |e, k, v: &mut Vec<Found<T>>| {
+                if oe_boxes[k].overlaps(&edge_boxes[e].inflate(pad)) {
                     let [a, b] = edges[e];
                     let [c, d] = obs_edges[k];
-                    v.push((EE, [a, b, c + n, d + n]));
-                })
-            }));
+                    keep(e, (EE, [a, b, c + n, d + n]), v);
+                }
+            });
+            out.extend(by_query(found, edges.len()));
             self.obs_faces = Some(of);
             self.obs_edges = Some(oe);
+            self.obs_nodes = Some(on);
         }
         if self_collision {
             // Cloth node vs cloth face not containing it.
-            out.extend(collect(0..n, |p, v| {
-                cf.query(&node_boxes[p], &face_boxes, |f| {
-                    let c = faces[f];
-                    if !c.contains(&p) {
-                        v.push((VF, [p, c[0], c[1], c[2]]));
-                    }
-                })
-            }));
-            // Cloth edge vs cloth edge, each unordered pair once, no shared node.
-            out.extend(collect(0..edges.len(), |e, v| {
-                ce.query(&edge_boxes[e].inflate(pad), &edge_boxes, |g| {
-                    let ([a, b], [c, d]) = (edges[e], edges[g]);
-                    if e < g && a != c && a != d && b != c && b != d {
-                        v.push((EE, [a, b, c, d]));
-                    }
-                })
-            }));
+            let found = cn.overlapping(&cf, false, near, |p, f, v: &mut Vec<Found<T>>| {
+                let c = faces[f];
+                if face_boxes[f].overlaps(&node_boxes[p]) && !c.contains(&p) {
+                    keep(p, (VF, [p, c[0], c[1], c[2]]), v);
+                }
+            });
+            out.extend(by_query(found, n));
+            // Cloth edge vs cloth edge, each unordered pair once (queried from the lower
+            // index), no shared node. The tree meets a pair from either side, so its nodes are
+            // near when either one's inflated box overlaps the other.
+            let near_either = |a: &Aabb, b: &Aabb| near_padded(a, b) || near_padded(b, a);
+            let found = ce.overlapping(&ce, true, near_either, |p, q, v: &mut Vec<Found<T>>| {
+                let (e, g) = (p.min(q), p.max(q));
+                let ([a, b], [c, d]) = (edges[e], edges[g]);
+                if a != c && a != d && b != c && b != d && edge_boxes[g].overlaps(&edge_boxes[e].inflate(pad)) {
+                    keep(e, (EE, [a, b, c, d]), v);
+                }
+            });
+            out.extend(by_query(found, edges.len()));
         }
         self.cloth_faces = Some(cf);
         self.cloth_edges = Some(ce);
+        self.cloth_nodes = Some(cn);
         out
     }
 }
 
-/// Runs `query(i, &mut found)` for each `i` in parallel and concatenates in index order. Each
-/// query's results are sorted: the order a tree finds them in depends on the tree's shape,
-/// hence on the positions it was built at, and a resumed run rebuilds its trees elsewhere.
-fn collect(range: std::ops::Range<usize>, query: impl Fn(usize, &mut Vec<Candidate>) + Sync) -> Vec<Candidate> {
-    range
-        .into_par_iter()
-        .fold(Vec::new, |mut v, i| {
-            let start = v.len();
-            query(i, &mut v);
-            v[start..].sort_unstable();
-            v
-        })
-        .reduce(Vec::new, |mut a, mut b| {
-            a.append(&mut b);
-            a
-        })
+/// Orders candidates by query primitive (a counting sort over `0..queries`), each query's
+/// candidates sorted.
+fn by_query<T>(found: Vec<Found<T>>, queries: usize) -> Vec<(Candidate, T)> {
+    let mut start = vec![0usize; queries + 1];
+    for &(q, ..) in &found {
+        start[q as usize + 1] += 1;
+    }
+    for q in 0..queries {
+        start[q + 1] += start[q];
+    }
+    let mut slot = vec![0usize; found.len()];
+    let mut next = start.clone();
+    for (k, &(q, ..)) in found.iter().enumerate() {
+        slot[k] = next[q as usize];
+        next[q as usize] += 1;
+    }
+    let mut placed: Vec<Option<(Candidate, T)>> = (0..found.len()).map(|_| None).collect();
+    for (k, (_, c, t)) in found.into_iter().enumerate() {
+        placed[slot[k]] = Some((c, t));
+    }
+    let mut out: Vec<(Candidate, T)> = placed.into_iter().map(|x| x.expect("every slot is filled once")).collect();
+    for q in 0..queries {
+        if start[q + 1] - start[q] > 1 {
+            // Equal candidates (a duplicated primitive) carry equal results.
+            out[start[q]..start[q + 1]].sort_unstable_by_key(|x| x.0);
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::rectangle;
+
+    /// The definition the tree–tree search must reproduce: every query primitive against every
+    /// target by the same box test, in query order, each query's candidates sorted.
+    fn brute(
+        mesh: &Mesh,
+        obs_tris: &[[usize; 3]],
+        obs_edges: &[[usize; 2]],
+        iv: &Interval,
+        pad: Real,
+    ) -> Vec<Candidate> {
+        let n = mesh.nodes.len();
+        let faces: Vec<[usize; 3]> = (0..mesh.faces.len()).map(|f| mesh.face_nodes(f)).collect();
+        let edges: Vec<[usize; 2]> = mesh.edges.iter().map(|e| sorted_edge(e.n[0].idx(), e.n[1].idx())).collect();
+        let fb: Vec<Aabb> = faces.iter().map(|f| iv.cloth_box(f)).collect();
+        let eb: Vec<Aabb> = edges.iter().map(|e| iv.cloth_box(e)).collect();
+        let ofb: Vec<Aabb> = obs_tris.iter().map(|t| iv.obs_box(t)).collect();
+        let oeb: Vec<Aabb> = obs_edges.iter().map(|e| iv.obs_box(e)).collect();
+        let mut out = Vec::new();
+        let mut section = |queries: usize, each: &dyn Fn(usize, &mut Vec<Candidate>)| {
+            for q in 0..queries {
+                let mut v = Vec::new();
+                each(q, &mut v);
+                v.sort_unstable();
+                out.extend(v);
+            }
+        };
+        section(n, &|p, v| {
+            let q = iv.cloth_box(&[p]).inflate(pad);
+            for (t, o) in obs_tris.iter().enumerate() {
+                if ofb[t].overlaps(&q) {
+                    v.push((VF, [p, o[0] + n, o[1] + n, o[2] + n]));
+                }
+            }
+        });
+        section(iv.obs1.len(), &|k, v| {
+            let q = iv.obs_box(&[k]).inflate(pad);
+            for (f, c) in faces.iter().enumerate() {
+                if fb[f].overlaps(&q) {
+                    v.push((VF, [k + n, c[0], c[1], c[2]]));
+                }
+            }
+        });
+        section(edges.len(), &|e, v| {
+            for (k, &[c, d]) in obs_edges.iter().enumerate() {
+                if oeb[k].overlaps(&eb[e].inflate(pad)) {
+                    v.push((EE, [edges[e][0], edges[e][1], c + n, d + n]));
+                }
+            }
+        });
+        section(n, &|p, v| {
+            let q = iv.cloth_box(&[p]).inflate(pad);
+            for (f, c) in faces.iter().enumerate() {
+                if fb[f].overlaps(&q) && !c.contains(&p) {
+                    v.push((VF, [p, c[0], c[1], c[2]]));
+                }
+            }
+        });
+        section(edges.len(), &|e, v| {
+            let [a, b] = edges[e];
+            for (g, &[c, d]) in edges.iter().enumerate() {
+                if e < g && a != c && a != d && b != c && b != d && eb[g].overlaps(&eb[e].inflate(pad)) {
+                    v.push((EE, [a, b, c, d]));
+                }
+            }
+        });
+        out
+    }
+
+    /// A crumpled sheet moving over an interval against a second, moving sheet as the obstacle:
+    /// the tree–tree candidates equal the per-query definition, before and after a refit.
+    #[test]
+    fn candidates_match_brute_force() {
+        let mut s = 7u64;
+        let mut rnd = move || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (s >> 11) as Real / (1u64 << 53) as Real - 0.5
+        };
+        let mut mesh = rectangle(1.0, 1.0, 12, 12).unwrap();
+        let obstacle = rectangle(1.0, 1.0, 9, 9).unwrap();
+        let obs_tris: Vec<[usize; 3]> = (0..obstacle.faces.len()).map(|f| obstacle.face_nodes(f)).collect();
+        let mut obs_edges: Vec<[usize; 2]> =
+            obstacle.edges.iter().map(|e| sorted_edge(e.n[0].idx(), e.n[1].idx())).collect();
+        obs_edges.sort_unstable();
+        let mut broad = BroadPhase::default();
+        for round in 0..3 {
+            for node in &mut mesh.nodes {
+                node.x += Vec3::new(rnd(), rnd(), rnd()) * 0.05;
+            }
+            let x0 = mesh.positions();
+            let x1: Vec<Vec3> = x0.iter().map(|x| x + Vec3::new(rnd(), rnd(), rnd()) * 0.02).collect();
+            let o0: Vec<Vec3> = obstacle.nodes.iter().map(|n| n.x + Vec3::new(rnd(), rnd(), 0.3 * rnd())).collect();
+            let o1: Vec<Vec3> = o0.iter().map(|x| x + Vec3::new(rnd(), rnd(), rnd()) * 0.02).collect();
+            let iv = Interval { cloth0: &x0, cloth1: &x1, obs0: &o0, obs1: &o1 };
+            for pad in [1e-6, 0.01, 0.05] {
+                let got = broad.candidates(&mesh, &obs_tris, &obs_edges, &iv, pad, true);
+                let want = brute(&mesh, &obs_tris, &obs_edges, &iv, pad);
+                assert!(want.len() > 100, "round {round}, pad {pad}: too few candidates to test");
+                assert_eq!(got, want, "round {round}, pad {pad}");
+            }
+        }
+    }
 }

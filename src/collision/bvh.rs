@@ -160,54 +160,153 @@ impl Bvh {
         }
     }
 
-    /// Every pair (a, b), a from `self`, b from `other`, whose boxes overlap.
+    /// Every pair (a, b), a from `self`, b from `other`, whose boxes overlap, sorted.
     pub fn pairs(&self, boxes: &[Aabb], other: &Bvh, other_boxes: &[Aabb]) -> Vec<(usize, usize)> {
-        let mut out = Vec::new();
-        if self.nodes.is_empty() || other.nodes.is_empty() {
-            return out;
-        }
-        let mut stack = vec![(0u32, 0u32)];
-        while let Some((i, j)) = stack.pop() {
-            let (a, b) = (&self.nodes[i as usize], &other.nodes[j as usize]);
-            if !a.aabb.overlaps(&b.aabb) {
-                continue;
-            }
-            match (a.count > 0, b.count > 0) {
-                (true, true) => {
-                    for &p in &self.order[a.start as usize..(a.start + a.count) as usize] {
-                        for &q in &other.order[b.start as usize..(b.start + b.count) as usize] {
-                            if boxes[p as usize].overlaps(&other_boxes[q as usize]) {
-                                out.push((p as usize, q as usize));
-                            }
-                        }
-                    }
+        let mut out = self.overlapping(
+            other,
+            false,
+            |a, b| a.overlaps(b),
+            |p, q, out: &mut Vec<(usize, usize)>| {
+                if boxes[p].overlaps(&other_boxes[q]) {
+                    out.push((p, q));
                 }
-                (false, true) => {
-                    stack.push((a.right, j));
-                    stack.push((a.left, j));
-                }
-                (true, false) => {
-                    stack.push((i, b.right));
-                    stack.push((i, b.left));
-                }
-                (false, false) => {
-                    stack.push((a.right, b.right));
-                    stack.push((a.right, b.left));
-                    stack.push((a.left, b.right));
-                    stack.push((a.left, b.left));
-                }
-            }
-        }
+            },
+        );
         out.sort_unstable();
         out
     }
 
-    /// Every unordered pair (a < b) of this tree's primitives whose boxes overlap.
+    /// Every unordered pair (a < b) of this tree's primitives whose boxes overlap, sorted.
     pub fn self_pairs(&self, boxes: &[Aabb]) -> Vec<(usize, usize)> {
-        let mut out: Vec<(usize, usize)> = self.pairs(boxes, self, boxes).into_iter().filter(|(a, b)| a < b).collect();
-        out.dedup();
+        let mut out = self.overlapping(
+            self,
+            true,
+            |a, b| a.overlaps(b),
+            |p, q, out: &mut Vec<(usize, usize)>| {
+                if boxes[p].overlaps(&boxes[q]) {
+                    out.push((p.min(q), p.max(q)));
+                }
+            },
+        );
+        out.sort_unstable();
         out
     }
+
+    /// Simultaneous descent of two trees (one query for all primitives instead of one per
+    /// primitive): calls `leaf(a, b, out)` for every primitive a of `self` and b of `other`
+    /// whose nodes pass `near` at every level. `near(node of self, node of other)` must hold
+    /// whenever `leaf` could report a pair below those nodes (boxes only grow up the tree). With
+    /// `same` (`other` is `self`), each unordered pair of distinct primitives is visited once,
+    /// in either order, and `near` must then be symmetric in that sense.
+    ///
+    /// The work is split into a fixed list of subtree pairs, run in parallel and concatenated
+    /// in list order: the output does not depend on the thread count.
+    pub fn overlapping<T: Send>(
+        &self,
+        other: &Bvh,
+        same: bool,
+        near: impl Fn(&Aabb, &Aabb) -> bool + Sync,
+        leaf: impl Fn(usize, usize, &mut Vec<T>) + Sync,
+    ) -> Vec<T> {
+        use rayon::prelude::*;
+        if self.nodes.is_empty() || other.nodes.is_empty() {
+            return Vec::new();
+        }
+        let mut tasks = vec![if same { Visit::Within(0) } else { Visit::Across(0, 0) }];
+        while tasks.len() < PARALLEL_TASKS {
+            let mut next = Vec::with_capacity(4 * tasks.len());
+            let mut split = false;
+            for t in tasks {
+                if self.expand(other, t, &near, &mut next) {
+                    split = true;
+                } else {
+                    next.push(t);
+                }
+            }
+            tasks = next;
+            if !split {
+                break;
+            }
+        }
+        tasks
+            .into_par_iter()
+            .flat_map_iter(|t| {
+                let (mut out, mut stack) = (Vec::new(), vec![t]);
+                while let Some(t) = stack.pop() {
+                    if !self.expand(other, t, &near, &mut stack) {
+                        self.leaf_pairs(other, t, &leaf, &mut out);
+                    }
+                }
+                out
+            })
+            .collect()
+    }
+
+    /// Pushes the children of visit `t` (none if its nodes are not near); false when `t` is a
+    /// pair of leaves (or one leaf with itself), to be tested primitive by primitive.
+    fn expand(&self, other: &Bvh, t: Visit, near: &impl Fn(&Aabb, &Aabb) -> bool, out: &mut Vec<Visit>) -> bool {
+        match t {
+            Visit::Within(i) => {
+                let a = &self.nodes[i as usize];
+                if a.count > 0 {
+                    return false;
+                }
+                out.extend([Visit::Across(a.left, a.right), Visit::Within(a.right), Visit::Within(a.left)]);
+            }
+            Visit::Across(i, j) => {
+                let (a, b) = (&self.nodes[i as usize], &other.nodes[j as usize]);
+                if !near(&a.aabb, &b.aabb) {
+                    return true;
+                }
+                match (a.count > 0, b.count > 0) {
+                    (true, true) => return false,
+                    (false, true) => out.extend([Visit::Across(a.right, j), Visit::Across(a.left, j)]),
+                    (true, false) => out.extend([Visit::Across(i, b.right), Visit::Across(i, b.left)]),
+                    (false, false) => out.extend([
+                        Visit::Across(a.right, b.right),
+                        Visit::Across(a.right, b.left),
+                        Visit::Across(a.left, b.right),
+                        Visit::Across(a.left, b.left),
+                    ]),
+                }
+            }
+        }
+        true
+    }
+
+    fn leaf_pairs<T>(&self, other: &Bvh, t: Visit, leaf: &impl Fn(usize, usize, &mut Vec<T>), out: &mut Vec<T>) {
+        fn prims(tree: &Bvh, i: u32) -> &[u32] {
+            let n = &tree.nodes[i as usize];
+            &tree.order[n.start as usize..(n.start + n.count) as usize]
+        }
+        match t {
+            Visit::Within(i) => {
+                let p = prims(self, i);
+                for (k, &a) in p.iter().enumerate() {
+                    for &b in &p[k + 1..] {
+                        leaf(a as usize, b as usize, out);
+                    }
+                }
+            }
+            Visit::Across(i, j) => {
+                for &a in prims(self, i) {
+                    for &b in prims(other, j) {
+                        leaf(a as usize, b as usize, out);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Subtree pairs a tree–tree query is split into for the thread pool.
+const PARALLEL_TASKS: usize = 64;
+
+/// A step of a tree–tree descent: two nodes (one from each tree), or one node against itself.
+#[derive(Clone, Copy, Debug)]
+enum Visit {
+    Across(u32, u32),
+    Within(u32),
 }
 
 #[cfg(test)]

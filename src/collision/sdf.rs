@@ -138,6 +138,22 @@ impl MeshSdf {
         points.par_iter().map(|p| self.query(p)).collect()
     }
 
+    /// `query` for every point that lies inside (negative distance), in parallel; `None` for
+    /// the others. On a closed mesh, points outside its bounding box are outside and skip the
+    /// query.
+    pub fn query_inside(&self, points: &[Vec3]) -> Vec<Option<SdfHit>> {
+        let root = self.tree.root_box();
+        points
+            .par_iter()
+            .map(|p| {
+                if self.closed && root.is_some_and(|b| b.distance_squared(p) > 0.0) {
+                    return None;
+                }
+                self.query(p).filter(|h| h.distance < 0.0)
+            })
+            .collect()
+    }
+
     /// How many points lie inside deeper than `depth` (signed distance < −depth). On a closed
     /// mesh, points outside its bounding box are outside and skip the query.
     pub fn count_deeper_than(&self, points: &[Vec3], depth: Real) -> usize {

@@ -4,9 +4,7 @@
 //! Index space: cloth nodes are `0..n`; obstacle vertices follow, body after body, as fixed
 //! points `n + k` (infinite mass, prescribed motion).
 
-use rayon::prelude::*;
-
-use super::broad::{BroadPhase, Interval, VF};
+use super::broad::{BroadPhase, Candidate, Interval, VF};
 use super::ccd::{edge_edge_ccd, vertex_face_ccd, Impact, CCD_TOLERANCE};
 use super::geometry::closest_point_triangle;
 use super::impact_zones::{resolve_zone, ZoneConstraint, ZoneState};
@@ -107,29 +105,31 @@ impl CollisionWorld {
         let x: Vec<Vec3> = mesh.positions();
         // Obstacle boxes span the step, so cloth the obstacle sweeps over is a candidate.
         let iv = Interval { cloth0: &x, cloth1: &x, obs0: &self.obs_x0, obs1: &self.obs_x1 };
-        let keys = self.broad.candidates(mesh, &self.obs_tris, &self.obs_edges, &iv, th, self.params.self_collision);
         let pos = |i: usize| if i < n { x[i] } else { self.obs_x1[i - n] };
         let travel: Vec<Real> = self.obs_x0.iter().zip(&self.obs_x1).map(|(a, b)| (b - a).norm()).collect();
         let outward = self.obstacle_vertex_normals();
         let k_area = self.params.stiffness;
-        let mut contacts: Vec<Contact> = keys
-            .par_iter()
-            .filter_map(|&(kind, nodes)| {
-                let xs = nodes.map(pos);
-                let area = nodes.iter().filter(|&&i| i < n).map(|&i| contact_area[i]).fold(0.0, Real::max);
-                let k = k_area * area;
-                let obstacle = || nodes.iter().filter(|&&i| i >= n).map(|&i| i - n);
-                let reach = th + obstacle().map(|i| travel[i]).fold(0.0, Real::max);
-                let out: Vec3 = obstacle().map(|i| outward[i]).sum();
-                match kind {
-                    VF if nodes[0] < n && nodes[1] >= n => self.obstacle_face_contact(nodes, &xs, k, reach),
-                    VF if nodes[0] >= n => obstacle_vertex_contact(nodes, &xs, th, k, reach, &out),
-                    VF => node_face_contact(nodes, &xs, th, k),
-                    _ if nodes[2] >= n => obstacle_edge_contact(nodes, &xs, th, k, reach, &out),
-                    _ => edge_edge_contact(nodes, &xs, th, k),
-                }
-            })
-            .collect();
+        // The trees are taken out while the narrow phase borrows the world.
+        let mut broad = std::mem::take(&mut self.broad);
+        let this = &*self;
+        let narrow = |(kind, nodes): Candidate| {
+            let xs = nodes.map(pos);
+            let area = nodes.iter().filter(|&&i| i < n).map(|&i| contact_area[i]).fold(0.0, Real::max);
+            let k = k_area * area;
+            let obstacle = || nodes.iter().filter(|&&i| i >= n).map(|&i| i - n);
+            let reach = th + obstacle().map(|i| travel[i]).fold(0.0, Real::max);
+            let out: Vec3 = obstacle().map(|i| outward[i]).sum();
+            match kind {
+                VF if nodes[0] < n && nodes[1] >= n => this.obstacle_face_contact(nodes, &xs, k, reach),
+                VF if nodes[0] >= n => obstacle_vertex_contact(nodes, &xs, th, k, reach, &out),
+                VF => node_face_contact(nodes, &xs, th, k),
+                _ if nodes[2] >= n => obstacle_edge_contact(nodes, &xs, th, k, reach, &out),
+                _ => edge_edge_contact(nodes, &xs, th, k),
+            }
+        };
+        let found = broad.search(mesh, &self.obs_tris, &self.obs_edges, &iv, th, self.params.self_collision, narrow);
+        self.broad = broad;
+        let mut contacts: Vec<Contact> = found.into_iter().map(|(_, c)| c).collect();
         // One node–face contact per (cloth node, obstacle body) is enough (ARCSim keeps the
         // nearest face per node): faces sharing an edge would otherwise push twice. Nearest by
         // unsigned distance |n · sep| = |gap + thickness|: the most negative gap would be the
@@ -193,34 +193,26 @@ impl CollisionWorld {
     pub fn detect_impacts(&mut self, mesh: &Mesh, x0: &[Vec3], x1: &[Vec3]) -> Vec<([usize; 4], Impact)> {
         let n = mesh.nodes.len();
         let iv = Interval { cloth0: x0, cloth1: x1, obs0: &self.obs_x0, obs1: &self.obs_x1 };
-        let keys = self.broad.candidates(
-            mesh,
-            &self.obs_tris,
-            &self.obs_edges,
-            &iv,
-            CCD_TOLERANCE,
-            self.params.self_collision,
-        );
         let (p0, p1) = (
             |i: usize| if i < n { x0[i] } else { self.obs_x0[i - n] },
             |i: usize| if i < n { x1[i] } else { self.obs_x1[i - n] },
         );
         let outward = self.obstacle_vertex_normals();
-        keys.par_iter()
-            .filter_map(|&(kind, nodes)| {
-                let (a, b) = (nodes.map(p0), nodes.map(p1));
-                let hit = if kind == VF {
-                    vertex_face_ccd(&a, &b, CCD_TOLERANCE)
-                } else {
-                    edge_edge_ccd(&a, &b, CCD_TOLERANCE)
-                };
-                let imp = hit.map(|imp| outside_obstacle(imp, &nodes, n, &outward))?;
-                // Cloth leaving an obstacle it was inside of has nothing to be stopped.
-                let obstacle = nodes.iter().any(|&i| i >= n);
-                let sep = |x: &[Vec3; 4]| (0..4).map(|j| imp.w[j] * imp.n.dot(&x[j])).sum::<Real>();
-                (!(obstacle && sep(&a) < 0.0 && sep(&b) >= 0.0)).then_some((nodes, imp))
-            })
-            .collect()
+        let narrow = |(kind, nodes): Candidate| {
+            let (a, b) = (nodes.map(p0), nodes.map(p1));
+            let hit =
+                if kind == VF { vertex_face_ccd(&a, &b, CCD_TOLERANCE) } else { edge_edge_ccd(&a, &b, CCD_TOLERANCE) };
+            let imp = hit.map(|imp| outside_obstacle(imp, &nodes, n, &outward))?;
+            // Cloth leaving an obstacle it was inside of has nothing to be stopped.
+            let obstacle = nodes.iter().any(|&i| i >= n);
+            let sep = |x: &[Vec3; 4]| (0..4).map(|j| imp.w[j] * imp.n.dot(&x[j])).sum::<Real>();
+            (!(obstacle && sep(&a) < 0.0 && sep(&b) >= 0.0)).then_some(imp)
+        };
+        let mut broad = std::mem::take(&mut self.broad);
+        let (tris, edges) = (&self.obs_tris, &self.obs_edges);
+        let found = broad.search(mesh, tris, edges, &iv, CCD_TOLERANCE, self.params.self_collision, narrow);
+        self.broad = broad;
+        found.into_iter().map(|((_, nodes), imp)| (nodes, imp)).collect()
     }
 
     /// Makes the end-of-step cloth positions `x` collision-free relative to `x0` by iterated CCD

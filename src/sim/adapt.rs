@@ -11,7 +11,6 @@ use crate::remesh::{remesh, Finished, RemeshLimits, RemeshStats};
 use crate::scene::RemeshMode;
 use crate::sizing::{face_metrics, vertex_metrics, ObstaclePlane, SizingParams};
 use crate::solver::pattern::BlockPattern;
-use crate::solver::ImplicitSystem;
 
 use super::{SimError, Simulation};
 
@@ -103,7 +102,8 @@ impl Simulation {
     }
 
     /// Takes a remeshed mesh: handles renumbered, rest angles carried over by node pair (new
-    /// edges rest flat), masses, rest data and the implicit system rebuilt.
+    /// edges rest flat), masses and rest data rebuilt, the
+    /// implicit system's new pattern left for the next step to analyse.
     fn adopt(&mut self, finished: Finished) -> Result<(), SimError> {
         let Finished { mesh, node_map } = finished;
         let mut old_angles: HashMap<(usize, usize), Real> = HashMap::new();
@@ -134,8 +134,7 @@ impl Simulation {
             .map_err(|f| SimError::Mesh(format!("remeshing left face {f} degenerate")))?;
         self.node_area = node_areas(&self.mesh, &self.rest);
         self.extra_pairs.clear();
-        self.system = ImplicitSystem::new(BlockPattern::new(&self.mesh, &self.rest.hinges, &[]))
-            .map_err(|source| SimError::Solve { step: self.steps, time: self.time, source })?;
+        self.pending_pattern = Some(BlockPattern::new(&self.mesh, &self.rest.hinges, &[]));
         self.push_out(None)?;
         Ok(())
     }

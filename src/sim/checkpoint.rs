@@ -195,6 +195,7 @@ impl Simulation {
             rest_angles: st.rest_angles,
             rest,
             system,
+            pending_pattern: None,
             extra_pairs: st.extra_pairs,
             collisions,
             node_area,

@@ -44,6 +44,10 @@ pub struct Simulation {
     rest_angles: Vec<Real>,
     rest: RestState,
     system: ImplicitSystem,
+    /// The pattern of a remeshed cloth, analysed only at the next step (`ensure_pattern`): that
+    /// step's self contacts usually extend it, and each analysis is a fill-reducing ordering and
+    /// a symbolic factorisation.
+    pending_pattern: Option<BlockPattern>,
     /// Cloth–cloth node pairs added to the base pattern for self contacts.
     extra_pairs: Vec<(usize, usize)>,
     /// Present when the scene has obstacles or self-collision.
@@ -88,6 +92,7 @@ impl Simulation {
             rest_angles,
             rest,
             system,
+            pending_pattern: None,
             extra_pairs: Vec::new(),
             collisions,
             node_area,
@@ -122,14 +127,13 @@ impl Simulation {
             let sdf = MeshSdf::new(body.triangles(), &body.positions_at(self.time));
             let mut too_deep = vec![0usize; self.scene.cloths.len()];
             let mut moves = Vec::new();
-            for (i, node) in self.mesh.nodes.iter().enumerate() {
-                let Some(q) = sdf.query(&node.x) else { continue };
-                if q.distance < 0.0 {
-                    if -q.distance > tol {
-                        too_deep[node.cloth as usize] += 1;
-                    } else {
-                        moves.push((i, q.point + q.normal * th));
-                    }
+            let inside = sdf.query_inside(&self.mesh.positions());
+            for (i, (node, q)) in self.mesh.nodes.iter().zip(inside).enumerate() {
+                let Some(q) = q else { continue };
+                if -q.distance > tol {
+                    too_deep[node.cloth as usize] += 1;
+                } else {
+                    moves.push((i, q.point + q.normal * th));
                 }
             }
             if let Some(c) = too_deep.iter().position(|&k| k > 0) {

@@ -25,28 +25,37 @@ impl Simulation {
         pinned
     }
 
-    /// Adds any cloth–cloth contact coupling missing from the system's pattern (the pattern only
-    /// grows, so the symbolic analysis is redone rarely).
-    fn ensure_contact_pattern(&mut self, contacts: &[Contact]) -> Result<(), SimError> {
+    /// Analyses the system's pattern for this step: a remeshed cloth's pending pattern, plus
+    /// any cloth–cloth contact coupling missing from it. The pattern only grows between
+    /// remeshes, but in a scene with self contact new contact regions appear at most steps
+    /// (growing by the one- or two-rings of the missing pairs did not change that in
+    /// dress-blue), so the analysis is redone about once per step there.
+    fn ensure_pattern(&mut self, contacts: &[Contact]) -> Result<(), SimError> {
         let n = self.mesh.nodes.len();
+        let pattern = self.pending_pattern.as_ref().unwrap_or(&self.system.pattern);
         let mut missing = Vec::new();
         for c in contacts {
             for a in 0..4 {
                 for b in 0..a {
                     let (i, j) = (c.nodes[a], c.nodes[b]);
-                    if i < n && j < n && i != j && self.system.pattern.block(i.max(j), i.min(j)).is_none() {
+                    if i < n && j < n && i != j && pattern.block(i.max(j), i.min(j)).is_none() {
                         missing.push((i.max(j), i.min(j)));
                     }
                 }
             }
         }
-        if missing.is_empty() {
-            return Ok(());
-        }
-        self.extra_pairs.extend(missing);
-        self.extra_pairs.sort_unstable();
-        self.extra_pairs.dedup();
-        let pattern = BlockPattern::new(&self.mesh, &self.rest.hinges, &self.extra_pairs);
+        let pattern = if missing.is_empty() {
+            match self.pending_pattern.take() {
+                Some(p) => p,
+                None => return Ok(()),
+            }
+        } else {
+            self.pending_pattern = None;
+            self.extra_pairs.extend(missing);
+            self.extra_pairs.sort_unstable();
+            self.extra_pairs.dedup();
+            BlockPattern::new(&self.mesh, &self.rest.hinges, &self.extra_pairs)
+        };
         self.system = ImplicitSystem::new(pattern).map_err(|source| SimError::Solve {
             step: self.steps,
             time: self.time,
@@ -75,9 +84,11 @@ impl Simulation {
         };
         if self.collisions.is_some() {
             self.counters.contacts += contacts.len();
-            self.ensure_contact_pattern(&contacts)?;
             self.timers.add("proximity", clock.elapsed().as_secs_f64());
         }
+        let clock = std::time::Instant::now();
+        self.ensure_pattern(&contacts)?;
+        self.timers.add("factorisation", clock.elapsed().as_secs_f64());
 
         let fixed: &[Vec3] = self.collisions.as_ref().map(|w| w.obs_x1.as_slice()).unwrap_or(&[]);
         let input = StepInput {
