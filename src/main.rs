@@ -237,7 +237,10 @@ fn convert(conf: &Path, out: &Path, base: Option<&Path>) -> ExitCode {
     for w in &warnings {
         eprintln!("warning: {}: {w}", conf.display());
     }
-    if let Err(e) = viewcloth::io::write_atomic(out, json.as_bytes()) {
+    let dir = out.parent().filter(|d| !d.as_os_str().is_empty());
+    if let Err(e) =
+        dir.map_or(Ok(()), std::fs::create_dir_all).and_then(|()| viewcloth::io::write_atomic(out, json.as_bytes()))
+    {
         eprintln!("error: {}: {e}", out.display());
         return ExitCode::from(EXIT_RUN);
     }

@@ -155,10 +155,14 @@ pub fn strip_comments(text: &str) -> String {
     out
 }
 
-/// `path` relative to `dir` when both resolve on disk, else `path` made absolute.
+/// `path` relative to `dir` when both resolve on disk (`dir` may not exist yet: its nearest
+/// existing ancestor resolves), else `path` made absolute.
 fn relative_path(path: &Path, dir: &Path) -> PathBuf {
-    let abs = |p: &Path| std::fs::canonicalize(p).ok();
-    let (Some(p), Some(d)) = (abs(path), abs(dir)) else {
+    fn resolve(p: &Path) -> Option<PathBuf> {
+        std::fs::canonicalize(p).ok().or_else(|| Some(resolve(p.parent()?)?.join(p.file_name()?)))
+    }
+    let dir = std::path::absolute(dir).unwrap_or_else(|_| dir.to_path_buf());
+    let (Some(p), Some(d)) = (std::fs::canonicalize(path).ok(), resolve(&dir)) else {
         return std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
     };
     let (pc, dc): (Vec<_>, Vec<_>) = (p.components().collect(), d.components().collect());
