@@ -347,19 +347,7 @@ fn orient_normal(n: Vec3, x0: &[Vec3; 4], x1: &[Vec3; 4], w: &[Real; 4]) -> Vec3
 mod tests {
     use super::*;
     use crate::collision::geometry::closest_point_triangle;
-
-    struct Rng(u64);
-    impl Rng {
-        fn uniform(&mut self) -> Real {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as Real / (1u64 << 53) as Real
-        }
-        fn vec(&mut self) -> Vec3 {
-            Vec3::new(self.uniform(), self.uniform(), self.uniform()) * 2.0 - Vec3::repeat(1.0)
-        }
-    }
+    use crate::math::test_rng::Rng;
 
     fn v(x: Real, y: Real, z: Real) -> Vec3 {
         Vec3::new(x, y, z)

@@ -273,20 +273,7 @@ fn segment_triangle_2d(p: &Vec2, q: &Vec2, x: &[Vec2; 3]) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// xorshift64*: deterministic test randomness without a dependency.
-    struct Rng(u64);
-    impl Rng {
-        fn uniform(&mut self) -> Real {
-            self.0 ^= self.0 >> 12;
-            self.0 ^= self.0 << 25;
-            self.0 ^= self.0 >> 27;
-            (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as Real / (1u64 << 53) as Real
-        }
-        fn vec(&mut self) -> Vec3 {
-            Vec3::new(self.uniform(), self.uniform(), self.uniform()) * 2.0 - Vec3::repeat(1.0)
-        }
-    }
+    use crate::math::test_rng::Rng;
 
     fn v(x: Real, y: Real, z: Real) -> Vec3 {
         Vec3::new(x, y, z)

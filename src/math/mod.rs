@@ -75,3 +75,5 @@ mod tests {
 }
 
 pub mod dual;
+#[cfg(test)]
+pub(crate) mod test_rng;
