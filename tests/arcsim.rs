@@ -6,9 +6,12 @@
 //! The ARCSim data is read from `../shared/arcsim` beside the repository (never copied into it);
 //! tests that need it print a SKIP line and pass when it is absent.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use common::{fd_errors, max_abs, FdErrors};
 use nalgebra::{SMatrix, SVector};
 use viewcloth::collision::sdf::MeshSdf;
 use viewcloth::forces::bending::{bending, dihedral_angle, BendingRest};
@@ -260,10 +263,6 @@ fn keyframe_velocities_hold_the_square_still_between_6_and_7_s() {
 // ---------------------------------------------------------------------------------------------
 // Measured materials: finite differences
 
-fn max_abs<const R: usize, const C: usize>(m: &SMatrix<Real, R, C>) -> Real {
-    m.iter().fold(0.0, |a, &b| a.max(b.abs()))
-}
-
 /// Central differences at shrinking ε: the error must fall like ε² until rounding (ratio ≥ 50 over
 /// a factor 10 in ε) or already be at rounding level.
 fn assert_second_order(what: &str, errs: &[Real], scale: Real) {
@@ -281,23 +280,7 @@ fn check_fd<const N: usize>(
     check_gradient: bool,
     f: impl Fn(&SVector<Real, N>) -> (Real, SVector<Real, N>, SMatrix<Real, N, N>),
 ) {
-    let (_, g, h) = f(x);
-    let (mut ge, mut he) = (Vec::new(), Vec::new());
-    for eps in [1e-3, 1e-4, 1e-5].map(|e| e * len) {
-        let mut g_fd = SVector::<Real, N>::zeros();
-        let mut h_fd = SMatrix::<Real, N, N>::zeros();
-        for i in 0..N {
-            let (mut xp, mut xm) = (*x, *x);
-            xp[i] += eps;
-            xm[i] -= eps;
-            let (ep, gp, _) = f(&xp);
-            let (em, gm, _) = f(&xm);
-            g_fd[i] = (ep - em) / (2.0 * eps);
-            h_fd.set_column(i, &((gp - gm) / (2.0 * eps)));
-        }
-        ge.push(max_abs(&(g_fd - g)));
-        he.push(max_abs(&(h_fd - h)));
-    }
+    let FdErrors { gradient: ge, hessian: he, g, h } = fd_errors(x, [1e-3, 1e-4, 1e-5].map(|e| e * len), f);
     if check_gradient {
         assert_second_order(&format!("{what}: gradient"), &ge, max_abs(&g).max(max_abs(&h) * len));
     }

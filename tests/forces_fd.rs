@@ -4,6 +4,9 @@
 //! Also: rigid motions give zero elastic force, and the PSD projections are PSD and agree with
 //! the exact Hessian where nothing needs projecting.
 
+mod common;
+
+use common::{fd_errors, max_abs, FdErrors};
 use nalgebra::{SMatrix, SVector, UnitQuaternion};
 use viewcloth::forces::bending::{bending, dihedral_angle, BendingRest};
 use viewcloth::forces::membrane::{membrane, MembraneRest, MembraneStiffness};
@@ -61,10 +64,6 @@ fn assert_second_order(what: &str, errors: &[Real], scale: Real) {
     assert!(rel_of(errors.len() - 1) < 1e-6, "{what}: relative FD errors {rel:?} do not converge");
 }
 
-fn max_abs<const R: usize, const C: usize>(m: &SMatrix<Real, R, C>) -> Real {
-    m.iter().fold(0.0, |a, b| a.max(b.abs()))
-}
-
 /// FD check of `grad` against `energy` and of `hess` against `grad`, around `x`, with steps
 /// `EPS · len`. Returns the relative errors at the finest step (for the log).
 fn check_fd<const N: usize>(
@@ -73,24 +72,7 @@ fn check_fd<const N: usize>(
     len: Real,
     f: impl Fn(&SVector<Real, N>) -> (Real, SVector<Real, N>, SMatrix<Real, N, N>),
 ) {
-    let (_, g, h) = f(x);
-    let mut grad_err = Vec::new();
-    let mut hess_err = Vec::new();
-    for eps in EPS.map(|e| e * len) {
-        let mut g_fd = SVector::<Real, N>::zeros();
-        let mut h_fd = SMatrix::<Real, N, N>::zeros();
-        for i in 0..N {
-            let (mut xp, mut xm) = (*x, *x);
-            xp[i] += eps;
-            xm[i] -= eps;
-            let (ep, gp, _) = f(&xp);
-            let (em, gm, _) = f(&xm);
-            g_fd[i] = (ep - em) / (2.0 * eps);
-            h_fd.set_column(i, &((gp - gm) / (2.0 * eps)));
-        }
-        grad_err.push(max_abs(&(g_fd - g)));
-        hess_err.push(max_abs(&(h_fd - h)));
-    }
+    let FdErrors { gradient: grad_err, hessian: hess_err, g, h } = fd_errors(x, EPS.map(|e| e * len), f);
     // Scales: the derivative's own size, or what a unit change over the element would give.
     let g_scale = max_abs(&g).max(max_abs(&h) * len);
     let h_scale = max_abs(&h);
