@@ -121,12 +121,14 @@ pub fn face_criteria(s: &FaceState, p: &SizingParams) -> Vec<Mat2> {
         out.push(gv.transpose() * gv / (dv * dv));
     }
     if p.refine_obstacle {
+        // ARCSim's obstacle_metric: each corner's plane, scaled by that corner's own distance.
         let mut m = Mat2::zeros();
-        for plane in s.planes.iter().flatten() {
+        for (k, plane) in s.planes.iter().enumerate() {
+            let Some(plane) = plane else { continue };
             let h = s.x.map(|x| plane.normal.dot(&(x - plane.point)));
             let grad_h = dm_inv.transpose() * Vec2::new(h[1] - h[0], h[2] - h[0]);
-            let hc = (h.iter().sum::<Real>() / 3.0).abs().max(1e-9);
-            m += grad_h * grad_h.transpose() / (hc * hc);
+            let hk = h[k].abs().max(1e-9);
+            m += grad_h * grad_h.transpose() / (hk * hk);
         }
         out.push(m / 3.0);
     }
@@ -253,6 +255,21 @@ mod tests {
         f.v = [Vec3::zeros(), Vec3::new(0.0, 0.0, 1.0), Vec3::zeros()];
         let m = face_sizing(&f, &p);
         assert!(m[(0, 0)] > m[(1, 1)] * 2.0, "{m}");
+    }
+
+    #[test]
+    fn obstacle_metric_scales_each_plane_by_its_own_corners_distance() {
+        // ARCSim's obstacle_metric: Σᵥ ∇h ∇hᵀ / h[v]², v the corner whose plane it is.
+        let p = params();
+        let mut f = flat_face();
+        let n = Vec3::new(-0.3, 0.0, 1.0).normalize();
+        let plane = ObstaclePlane { point: Vec3::new(0.0, 0.0, -0.002), normal: n };
+        f.planes = [Some(plane), None, None];
+        let m = face_criteria(&f, &p).pop().unwrap();
+        let h0 = n.dot(&(f.x[0] - plane.point));
+        let grad = Vec2::new(n.x, n.y);
+        let expected = grad * grad.transpose() / (h0 * h0 * 3.0);
+        assert!((m - expected).norm() < 1e-9 * expected.norm(), "{m} vs {expected}");
     }
 
     #[test]
