@@ -1,0 +1,185 @@
+//! Conversion of a conf's cloths: mesh, transform, velocity, material (measured data or
+//! isotropic parameters, with ARCSim's multipliers) and remeshing parameters.
+
+use std::path::PathBuf;
+
+use serde_json::Value;
+
+use super::{join, nums, obj, Conv, Disabled, Magic, J};
+use crate::scene::arcsim::Res;
+
+impl Conv<'_> {
+    /// One cloth's scene fields and its mesh file.
+    pub(super) fn cloth(
+        &mut self,
+        v: &Value,
+        c: usize,
+        disabled: &Disabled,
+        magic: &Magic,
+    ) -> Res<(Vec<(String, J)>, PathBuf)> {
+        let loc = format!("cloths[{c}]");
+        let m = self.object(v, &loc)?;
+        let known = ["mesh", "transform", "velocity", "materials", "remeshing"];
+        self.check_keys(m, &loc, &known, &[("reference", "reference shapes are not supported")]);
+        let rel = self.string(m.get("mesh").unwrap_or(&Value::Null), &join(&loc, "mesh"))?;
+        let (full, mesh) = self.path(rel);
+        let mut fields: Vec<(String, J)> = vec![("mesh".into(), J::Str(mesh))];
+        if let Some(t) = m.get("transform") {
+            fields.push(("transform".into(), self.transform(t, &join(&loc, "transform"))?));
+        }
+        if let Some(vel) = m.get("velocity") {
+            fields.push(("velocity".into(), nums(&self.cloth_velocity(vel, &join(&loc, "velocity"))?)));
+        }
+        let materials = self.array(m.get("materials").unwrap_or(&Value::Null), &join(&loc, "materials"))?;
+        let Some(first) = materials.first() else {
+            return Err(self.err(&join(&loc, "materials"), "expected at least one material"));
+        };
+        if materials.len() > 1 {
+            let msg = "only the first material is used (faces carry no material labels here)";
+            self.warn(&format!("{loc}.materials[1]"), msg);
+        }
+        let material = self.material(first, &format!("{loc}.materials[0]"), disabled)?;
+        fields.push(("material".into(), material));
+        match (m.get("remeshing"), disabled.remeshing) {
+            (Some(_), true) | (None, _) => {}
+            (Some(r), false) => fields.push(("remesh".into(), self.remeshing(r, &join(&loc, "remeshing"), magic)?)),
+        }
+        fields.push(("rest_angles".into(), J::Str("flat".into())));
+        Ok((fields, full))
+    }
+
+    /// A cloth's initial velocity: `[x, y, z]` or `{linear, angular, origin}`.
+    fn cloth_velocity(&mut self, v: &Value, loc: &str) -> Res<[f64; 3]> {
+        if v.is_array() {
+            return self.numbers::<3>(v, loc);
+        }
+        let m = self.object(v, loc)?;
+        self.check_keys(m, loc, &["linear", "angular", "origin"], &[]);
+        if let Some(w) = m.get("angular") {
+            if self.numbers::<3>(w, &join(loc, "angular"))? != [0.0; 3] {
+                self.warn(&join(loc, "angular"), "initial angular velocity is not supported; ignored");
+            }
+        }
+        match m.get("linear") {
+            Some(l) => self.numbers::<3>(l, &join(loc, "linear")),
+            None => Ok([0.0; 3]),
+        }
+    }
+
+    fn material(&mut self, v: &Value, loc: &str, disabled: &Disabled) -> Res<J> {
+        let m = self.object(v, loc)?;
+        let known = [
+            "data",
+            "density_mult",
+            "stretching_mult",
+            "bending_mult",
+            "thicken",
+            "damping",
+            "strain_limits",
+            "thickness",
+            "density",
+            "elastic_modulus",
+            "poisson_ratio",
+        ];
+        let not_supported = "plasticity and fracture are not supported";
+        let ignored = [
+            ("yield_curv", not_supported),
+            ("weakening", not_supported),
+            ("yield_stretch", not_supported),
+            ("plastic_flow", not_supported),
+            ("plastic_limit", not_supported),
+            ("toughness", not_supported),
+            ("fracture_bending_mult", not_supported),
+        ];
+        self.check_keys(m, loc, &known, &ignored);
+        if let Some(sl) = m.get("strain_limits") {
+            self.numbers::<2>(sl, &join(loc, "strain_limits"))?;
+            if !disabled.strain_limiting {
+                self.warn(&join(loc, "strain_limits"), "strain limiting is not supported; ignored");
+            }
+        }
+        let mut fields = Vec::new();
+        let mult = |c: &Self, key: &str| -> Res<Option<f64>> {
+            match c.opt_num(m, key, loc)? {
+                Some(x) if x <= 0.0 => Err(c.err(&join(loc, key), format!("expected a positive number, got {x}"))),
+                other => Ok(other),
+            }
+        };
+        match m.get("data") {
+            Some(d) => {
+                let (_, file) = self.path(self.string(d, &join(loc, "data"))?);
+                fields.push(("arcsim", J::Str(file)));
+                for key in ["density_mult", "stretching_mult", "bending_mult", "thicken"] {
+                    if let Some(x) = mult(self, key)? {
+                        fields.push((key, J::Num(x)));
+                    }
+                }
+            }
+            None => {
+                // ARCSim's isotropic material: density in kg/m³, E in Pa, bending E t³/(12(1 − ν²)).
+                let need = |c: &Self, key: &str| -> Res<f64> {
+                    match c.opt_num(m, key, loc)? {
+                        Some(x) if x > 0.0 => Ok(x),
+                        Some(x) => Err(c.err(&join(loc, key), format!("expected a positive number, got {x}"))),
+                        None => Err(c.err(&join(loc, key), "expected a number (or a \"data\" file)")),
+                    }
+                };
+                let (t, rho, e) = (need(self, "thickness")?, need(self, "density")?, need(self, "elastic_modulus")?);
+                let nu = self.opt_num(m, "poisson_ratio", loc)?.unwrap_or(0.0);
+                if !(0.0..0.5).contains(&nu) {
+                    return Err(
+                        self.err(&join(loc, "poisson_ratio"), format!("expected a number in [0, 0.5), got {nu}"))
+                    );
+                }
+                let bending = e * t.powi(3) / (12.0 * (1.0 - nu * nu)) * mult(self, "bending_mult")?.unwrap_or(1.0);
+                fields.push(("density", J::Num(rho * t)));
+                fields.push(("youngs_modulus", J::Num(e)));
+                fields.push(("poisson_ratio", J::Num(nu)));
+                fields.push(("thickness", J::Num(t)));
+                fields.push(("bending", J::Num(bending)));
+                if let Some(s) = mult(self, "stretching_mult")? {
+                    fields.push(("stretching_mult", J::Num(s)));
+                }
+                for key in ["density_mult", "thicken"] {
+                    if m.contains_key(key) {
+                        self.warn(&join(loc, key), "only used with a \"data\" file (as in ARCSim); ignored");
+                    }
+                }
+            }
+        }
+        let damping = match self.opt_num(m, "damping", loc)? {
+            Some(d) if d < 0.0 => {
+                return Err(self.err(&join(loc, "damping"), format!("expected a number ≥ 0, got {d}")))
+            }
+            Some(d) => d,
+            None => 0.0,
+        };
+        fields.push(("damping", J::Num(damping)));
+        Ok(obj(fields))
+    }
+
+    fn remeshing(&mut self, v: &Value, loc: &str, magic: &Magic) -> Res<J> {
+        let m = self.object(v, loc)?;
+        let known = ["refine_angle", "refine_compression", "refine_velocity", "size", "aspect_min"];
+        let ignored = [("size_uniform", "not supported"), ("refine_fracture", "fracture is not supported")];
+        self.check_keys(m, loc, &known, &ignored);
+        let mut fields = Vec::new();
+        if magic.fixed_high_res_mesh {
+            fields.push(("mode", J::Str("uniform".into())));
+        }
+        for key in ["refine_angle", "refine_compression", "refine_velocity"] {
+            if let Some(x) = self.opt_num(m, key, loc)? {
+                fields.push((key, J::Num(x)));
+            }
+        }
+        let size = m.get("size").ok_or_else(|| self.err(&join(loc, "size"), "expected [min, max] edge lengths (m)"))?;
+        fields.push(("size", nums(&self.numbers::<2>(size, &join(loc, "size"))?)));
+        if let Some(a) = self.opt_num(m, "aspect_min", loc)? {
+            fields.push(("aspect_min", J::Num(a)));
+        }
+        if let Some(combine) = magic.combine_tensors {
+            fields.push(("combine", J::Str(if combine { "max" } else { "sum" }.into())));
+        }
+        Ok(obj(fields))
+    }
+}
