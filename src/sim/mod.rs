@@ -48,7 +48,8 @@ pub struct Simulation {
     /// step's self contacts usually extend it, and each analysis is a fill-reducing ordering and
     /// a symbolic factorisation.
     pending_pattern: Option<BlockPattern>,
-    /// Cloth–cloth node pairs added to the base pattern for self contacts.
+    /// Cloth–cloth node pairs added to the base pattern for self contacts; those recorded
+    /// within a frame enter the pattern at the next frame start (`add_recorded_pairs`).
     extra_pairs: Vec<(usize, usize)>,
     /// Present when the scene has obstacles or self-collision.
     pub collisions: Option<CollisionWorld>,

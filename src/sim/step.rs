@@ -25,11 +25,12 @@ impl Simulation {
         pinned
     }
 
-    /// Analyses the system's pattern for this step: a remeshed cloth's pending pattern, plus
-    /// any cloth–cloth contact coupling missing from it. The pattern only grows between
-    /// remeshes, but in a scene with self contact new contact regions appear at most steps
-    /// (growing by the one- or two-rings of the missing pairs did not change that in
-    /// dress-blue), so the analysis is redone about once per step there.
+    /// Analyses a remeshed cloth's pending pattern, extended by this step's missing cloth–cloth
+    /// contact couplings. Otherwise the pattern stays fixed within the frame: a missing
+    /// coupling is only recorded in `extra_pairs` (assembly majorizes that contact on the
+    /// diagonal) and enters at the next frame start (`add_recorded_pairs`), because in a scene
+    /// with self contact new pairs appear at most steps and each analysis is a fill-reducing
+    /// ordering and a symbolic factorisation.
     fn ensure_pattern(&mut self, contacts: &[Contact]) -> Result<(), SimError> {
         let n = self.mesh.nodes.len();
         let pattern = self.pending_pattern.as_ref().unwrap_or(&self.system.pattern);
@@ -44,23 +45,39 @@ impl Simulation {
                 }
             }
         }
-        let pattern = if missing.is_empty() {
-            match self.pending_pattern.take() {
-                Some(p) => p,
-                None => return Ok(()),
-            }
-        } else {
-            self.pending_pattern = None;
+        if !missing.is_empty() {
             self.extra_pairs.extend(missing);
             self.extra_pairs.sort_unstable();
             self.extra_pairs.dedup();
-            BlockPattern::new(&self.mesh, &self.rest.hinges, &self.extra_pairs)
-        };
+            if self.pending_pattern.is_some() {
+                self.pending_pattern = Some(BlockPattern::new(&self.mesh, &self.rest.hinges, &self.extra_pairs));
+            }
+        }
+        let Some(pattern) = self.pending_pattern.take() else { return Ok(()) };
         self.system = ImplicitSystem::new(pattern).map_err(|source| SimError::Solve {
             step: self.steps,
             time: self.time,
             source,
         })?;
+        Ok(())
+    }
+
+    /// At a frame start without a remesh: analyses the pattern with the contact couplings
+    /// recorded during the previous frame. Done here rather than at the next step so that the
+    /// system at a frame boundary is the one a checkpoint rebuilds from `extra_pairs`.
+    fn add_recorded_pairs(&mut self) -> Result<(), SimError> {
+        let pattern = &self.system.pattern;
+        if self.pending_pattern.is_some() || self.extra_pairs.iter().all(|&(i, j)| pattern.block(i, j).is_some()) {
+            return Ok(());
+        }
+        let clock = std::time::Instant::now();
+        let pattern = BlockPattern::new(&self.mesh, &self.rest.hinges, &self.extra_pairs);
+        self.system = ImplicitSystem::new(pattern).map_err(|source| SimError::Solve {
+            step: self.steps,
+            time: self.time,
+            source,
+        })?;
+        self.timers.add("factorisation", clock.elapsed().as_secs_f64());
         Ok(())
     }
 
@@ -210,6 +227,7 @@ impl Simulation {
             self.remesh_stats.flips += s.flips;
             self.remesh_stats.collapses += s.collapses;
         }
+        self.add_recorded_pairs()?;
         self.frame += 1;
         let h = self.scene.time_step();
         for _ in 0..self.scene.steps_per_frame {

@@ -15,6 +15,9 @@ use crate::scene::material::Material;
 use super::pattern::NONE;
 use super::{ImplicitSystem, SolveError};
 
+/// A contact coupling absent from the pattern (see `add_contacts`).
+const MISSING: usize = usize::MAX - 1;
+
 /// Elements processed per parallel chunk (bounds the memory of local matrices).
 const CHUNK: usize = 4096;
 
@@ -178,6 +181,13 @@ impl ImplicitSystem {
 
     /// Repulsion contacts enter like elastic elements (without damping):
     /// A += h² K_c, b += h (−∇E_c − h K_c v) over the cloth nodes; fixed points are constant.
+    ///
+    /// A contact coupling cloth nodes whose blocks are not all in the pattern (the simulation
+    /// adds them at the next frame start, not mid-frame, to keep one symbolic analysis per
+    /// frame) keeps its exact right-hand side, but its matrix enters on the diagonal only, as
+    /// a majorizer: K_c = k (w wᵀ) ⊗ (n nᵀ) and, for the m cloth nodes of the contact,
+    /// (Σᵢ wᵢ xᵢ·n)² ≤ m Σᵢ wᵢ² (xᵢ·n)² (Cauchy–Schwarz), so m · blockdiag(K_c) ⪰ K_c: the
+    /// system stays SPD and the step is at least as stiff as with the full block.
     fn add_contacts(&mut self, inp: &StepInput) {
         let n = inp.mesh.nodes.len();
         let h = inp.h;
@@ -196,26 +206,43 @@ impl ImplicitSystem {
                 }
             });
             let rhs = -h * grad - h * h * (hess * vl);
+            let slots = self.contact_slots(&c.nodes, n);
+            let cloth = c.nodes.iter().filter(|&&i| i < n).count() as Real;
+            let complete = slots.iter().all(|&s| s != MISSING);
             for a in 0..4 {
                 let i = c.nodes[a];
                 if i >= n {
                     continue;
                 }
                 self.rhs[i] += rhs.fixed_rows::<3>(3 * a);
+                if !complete {
+                    let diag = self.pattern.col_start[i]; // first in its column
+                    self.blocks[diag] += (cloth * h * h) * hess.fixed_view::<3, 3>(3 * a, 3 * a);
+                    continue;
+                }
                 for b in 0..4 {
-                    let j = c.nodes[b];
-                    if j >= n || i < j {
-                        continue;
-                    }
-                    // The simulation extends the pattern with contact couplings before the solve.
-                    let blk = self.pattern.block(i, j);
-                    debug_assert!(blk.is_some(), "contact coupling ({i}, {j}) missing from the pattern");
-                    if let Some(blk) = blk {
-                        self.blocks[blk] += h * h * hess.fixed_view::<3, 3>(3 * a, 3 * b);
+                    let s = slots[4 * a + b];
+                    if s != NONE {
+                        self.blocks[s] += h * h * hess.fixed_view::<3, 3>(3 * a, 3 * b);
                     }
                 }
             }
         }
+    }
+
+    /// Block index of each lower-triangle cloth–cloth coupling (a, b) of a contact; `NONE` for
+    /// a fixed point or the upper triangle, `MISSING` for a coupling not in the pattern.
+    fn contact_slots(&self, nodes: &[usize; 4], n: usize) -> [usize; 16] {
+        let mut slots = [NONE; 16];
+        for a in 0..4 {
+            for b in 0..4 {
+                let (i, j) = (nodes[a], nodes[b]);
+                if i < n && j < n && i >= j {
+                    slots[4 * a + b] = self.pattern.block(i, j).unwrap_or(MISSING);
+                }
+            }
+        }
+        slots
     }
 
     /// Dirichlet elimination: a pinned node's Δv is prescribed; its coupling moves to the right
