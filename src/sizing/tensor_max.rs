@@ -153,7 +153,7 @@ mod tests {
         for _ in 0..200 {
             let ms: Vec<Mat2> = (0..4)
                 .map(|_| {
-                    let th: f64 = rnd() * 3.14;
+                    let th: f64 = rnd() * std::f64::consts::PI;
                     let (c, sn) = (th.cos(), th.sin());
                     let q = Mat2::new(c, -sn, sn, c);
                     q * Mat2::new(rnd() * 10.0, 0.0, 0.0, rnd()) * q.transpose()
