@@ -5,9 +5,7 @@ use std::path::{Path, PathBuf};
 
 use super::material::resolve;
 use super::motion::{KeyVelocity, Keyframe, Motion, Transform};
-use super::spec::{
-    ClothSpec, CollisionSpec, HandleSpec, KeyframeSpec, MotSpec, ObstacleSpec, RemeshSpec, SceneSpec, TransformSpec,
-};
+use super::spec::{ClothSpec, CollisionSpec, HandleSpec, KeyframeSpec, MotSpec, RemeshSpec, SceneSpec, TransformSpec};
 use super::{
     Cloth, CollisionParams, FollowObstacle, Handle, InputError, Obstacle, ObstacleShape, Remesh, RemeshMode, Scene,
 };
@@ -18,8 +16,11 @@ use crate::mesh::{rectangle, Face, Mesh, MeshError, Node, NodeId, Vert, VertId};
 use crate::sizing::{Combine, SizingParams};
 
 /// The built-in default shot (`viewcloth simulate` with no scene).
-pub const DEFAULT_SCENE: &str = include_str!("../../scenes/hanging_sheet.json");
+pub const DEFAULT_SCENE: &str = include_str!("../../../scenes/hanging_sheet.json");
 pub const DEFAULT_SCENE_NAME: &str = "hanging_sheet";
+
+mod obstacle;
+use obstacle::load_obstacle;
 
 type Res<T> = Result<T, InputError>;
 
@@ -633,103 +634,6 @@ fn orient_faces(mesh: &mut Mesh) -> Result<(), (usize, String)> {
         }
     }
     Ok(())
-}
-
-fn load_obstacle(ctx: &Ctx, o: usize, os: &ObstacleSpec) -> Res<Obstacle> {
-    let path = format!("obstacles[{o}]");
-    let count = [
-        os.mesh.is_some(),
-        os.sphere.is_some(),
-        os.plane.is_some(),
-        os.cuboid.is_some(),
-        os.capsule.is_some(),
-        os.sequence.is_some(),
-    ]
-    .iter()
-    .filter(|b| **b)
-    .count();
-    if count != 1 {
-        return Err(ctx.err(&path, "expected exactly one shape: mesh, sphere, plane, box, capsule or sequence"));
-    }
-    let shape = if let Some(file) = &os.mesh {
-        let full = mesh_file(ctx, &format!("{path}.mesh"), file)?;
-        let data = read_obj(&full).map_err(|msg| InputError { file: full.clone(), location: None, msg })?;
-        ObstacleShape::Mesh(data)
-    } else if let Some(s) = &os.sphere {
-        ObstacleShape::Sphere { radius: positive(ctx, &format!("{path}.sphere.radius"), s.radius)? }
-    } else if let Some(p) = &os.plane {
-        ObstacleShape::Plane {
-            size: [
-                positive(ctx, &format!("{path}.plane.size[0]"), p.size[0])?,
-                positive(ctx, &format!("{path}.plane.size[1]"), p.size[1])?,
-            ],
-        }
-    } else if let Some(b) = &os.cuboid {
-        let mut size = [0.0; 3];
-        for (i, s) in size.iter_mut().enumerate() {
-            *s = positive(ctx, &format!("{path}.box.size[{i}]"), b.size[i])?;
-        }
-        ObstacleShape::Box { size }
-    } else if let Some(c) = &os.capsule {
-        ObstacleShape::Capsule {
-            radius: positive(ctx, &format!("{path}.capsule.radius"), c.radius)?,
-            length: non_negative(ctx, &format!("{path}.capsule.length"), c.length)?,
-        }
-    } else if let Some(seq) = &os.sequence {
-        ObstacleShape::Sequence(load_sequence(ctx, &format!("{path}.sequence"), seq)?)
-    } else {
-        unreachable!("count == 1 checked above")
-    };
-    Ok(Obstacle {
-        name: os.name.clone().unwrap_or_else(|| format!("obstacle{o}")),
-        shape,
-        transform: transform(ctx, &format!("{path}.transform"), &os.transform)?,
-        motion: motion_or_mot(ctx, &path, os.motion.as_deref(), os.mot.as_ref())?,
-    })
-}
-
-/// Reads every file of a per-frame OBJ sequence; all must share the first file's vertex count
-/// and faces.
-fn load_sequence(ctx: &Ctx, path: &str, seq: &super::spec::SequenceSpec) -> Res<super::MeshSequence> {
-    let fps = positive(ctx, &format!("{path}.fps"), seq.fps)?;
-    if !seq.start_time.is_finite() {
-        return Err(ctx.err(format!("{path}.start_time"), "expected a finite time"));
-    }
-    if !(1..=1_000_000).contains(&seq.count) {
-        let msg = format!("expected an integer in 1..=1000000, got {}", seq.count);
-        return Err(ctx.err(format!("{path}.count"), msg));
-    }
-    if seq.first < 0 {
-        let msg = format!("expected an integer ≥ 0, got {}", seq.first);
-        return Err(ctx.err(format!("{path}.first"), msg));
-    }
-    let mut mesh: Option<ObjData> = None;
-    let mut frames = Vec::with_capacity(seq.count as usize);
-    for k in 0..seq.count {
-        let name = format_frame(&seq.pattern, seq.first + k).map_err(|msg| ctx.err(format!("{path}.pattern"), msg))?;
-        let full = ctx.resolve(&name);
-        let data = read_obj(&full).map_err(|msg| InputError { file: full.clone(), location: None, msg })?;
-        let file_err = |msg: String| InputError { file: full.clone(), location: None, msg };
-        if let Some(m) = &mesh {
-            if data.positions.len() != m.positions.len() {
-                return Err(file_err(format!(
-                    "sequence frame has {} vertices, expected {} as in the first frame",
-                    data.positions.len(),
-                    m.positions.len()
-                )));
-            }
-            let same_faces = data.triangles.len() == m.triangles.len()
-                && data.triangles.iter().zip(&m.triangles).all(|(a, b)| a.map(|c| c.v) == b.map(|c| c.v));
-            if !same_faces {
-                return Err(file_err("sequence frame has different faces from the first frame".into()));
-            }
-        } else if data.triangles.is_empty() {
-            return Err(file_err("the mesh has no faces".into()));
-        }
-        frames.push(data.positions.clone());
-        mesh.get_or_insert(data);
-    }
-    Ok(super::MeshSequence { mesh: mesh.expect("count ≥ 1 checked above"), frames, start_time: seq.start_time, fps })
 }
 
 /// Substitutes the frame number for the one printf-style `%d` / `%0Nd` in `pattern`.
