@@ -69,6 +69,8 @@ impl BroadPhase {
     /// hence on the positions it was built at, and a resumed run rebuilds its trees elsewhere.
     /// The trees are searched against each other (`Bvh::overlapping`), and every reported pair
     /// passes the same box test a per-query search would apply, so the list is the same.
+    /// (The simulation calls `search`; this is its reference form for the tests.)
+    #[cfg(test)]
     pub fn candidates(
         &mut self,
         mesh: &Mesh,

@@ -40,6 +40,8 @@ pub struct CollisionWorld {
     /// Obstacle vertex positions at the start and end of the current step.
     pub obs_x0: Vec<Vec3>,
     pub obs_x1: Vec<Vec3>,
+    /// Outward unit normals of the obstacle vertices at `obs_x1`.
+    obs_normals: Vec<Vec3>,
     obs_edges: Vec<[usize; 2]>,
     broad: BroadPhase,
 }
@@ -66,10 +68,12 @@ impl CollisionWorld {
             body_start,
             obs_x0: Vec::new(),
             obs_x1: Vec::new(),
+            obs_normals: Vec::new(),
             obs_edges,
             broad: BroadPhase::default(),
         };
         w.obs_x1 = w.positions_at(t);
+        w.obs_normals = w.obstacle_vertex_normals();
         w.obs_x0 = w.obs_x1.clone();
         w
     }
@@ -82,6 +86,7 @@ impl CollisionWorld {
     pub fn advance(&mut self, t0: Real, t1: Real) {
         self.obs_x0 = self.positions_at(t0);
         self.obs_x1 = self.positions_at(t1);
+        self.obs_normals = self.obstacle_vertex_normals();
     }
 
     /// Velocities of obstacle vertices over the current step of length `h`.
@@ -107,7 +112,7 @@ impl CollisionWorld {
         let iv = Interval { cloth0: &x, cloth1: &x, obs0: &self.obs_x0, obs1: &self.obs_x1 };
         let pos = |i: usize| if i < n { x[i] } else { self.obs_x1[i - n] };
         let travel: Vec<Real> = self.obs_x0.iter().zip(&self.obs_x1).map(|(a, b)| (b - a).norm()).collect();
-        let outward = self.obstacle_vertex_normals();
+        let outward = &self.obs_normals;
         let k_area = self.params.stiffness;
         // The trees are taken out while the narrow phase borrows the world.
         let mut broad = std::mem::take(&mut self.broad);
@@ -197,7 +202,7 @@ impl CollisionWorld {
             |i: usize| if i < n { x0[i] } else { self.obs_x0[i - n] },
             |i: usize| if i < n { x1[i] } else { self.obs_x1[i - n] },
         );
-        let outward = self.obstacle_vertex_normals();
+        let outward = &self.obs_normals;
         let narrow = |(kind, nodes): Candidate| {
             let (a, b) = (nodes.map(p0), nodes.map(p1));
             let hit =

@@ -328,10 +328,6 @@ impl Simulation {
             // Friction and collisions changed nothing: the solve's check stands.
             return Ok(());
         }
-        if v == v_solved {
-            // Friction and collisions changed nothing: the solve's check stands.
-            return Ok(());
-        }
         // Friction and impact zones are inelastic: they create no energy beyond carrying the
         // nodes they touch along with a moving obstacle (at up to twice its speed) and the kick
         // of pushing a node out by up to `KICK_THICKNESSES` thicknesses within the step. Both
