@@ -53,7 +53,14 @@ impl Simulation {
                 self.pending_pattern = Some(BlockPattern::new(&self.mesh, &self.rest.hinges, &self.extra_pairs));
             }
         }
-        let Some(pattern) = self.pending_pattern.take() else { return Ok(()) };
+        match self.pending_pattern.take() {
+            Some(pattern) => self.analyse(pattern),
+            None => Ok(()),
+        }
+    }
+
+    /// A new implicit system over `pattern`: fill-reducing ordering and symbolic factorisation.
+    fn analyse(&mut self, pattern: BlockPattern) -> Result<(), SimError> {
         self.system = ImplicitSystem::new(pattern).map_err(|source| SimError::Solve {
             step: self.steps,
             time: self.time,
@@ -71,12 +78,7 @@ impl Simulation {
             return Ok(());
         }
         let clock = std::time::Instant::now();
-        let pattern = BlockPattern::new(&self.mesh, &self.rest.hinges, &self.extra_pairs);
-        self.system = ImplicitSystem::new(pattern).map_err(|source| SimError::Solve {
-            step: self.steps,
-            time: self.time,
-            source,
-        })?;
+        self.analyse(BlockPattern::new(&self.mesh, &self.rest.hinges, &self.extra_pairs))?;
         self.timers.add("factorisation", clock.elapsed().as_secs_f64());
         Ok(())
     }
