@@ -3,7 +3,9 @@
 //! obstacle meshes written with `--export-obstacles` (signed distance of every cloth vertex to
 //! every obstacle, negative inside), independently of the simulator's own counters.
 //!
-//! Usage: `arcsim_report <run dir> <frame,frame,…>`; prints one JSON object.
+//! Usage: `arcsim_report <run dir> <frame,frame,…> [span,span,…]`; prints one JSON object. Each
+//! span N adds the mean and median wall time of the first N simulated frames, to set beside a
+//! reference measured over the same frames.
 
 use std::path::Path;
 
@@ -21,7 +23,18 @@ fn main() {
     let stats: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(dir.join("stats.json")).expect("stats.json")).expect("JSON");
     let frames = stats["frames"].as_array().expect("frames");
-    let mut wall: Vec<f64> = frames.iter().skip(1).filter_map(|f| f["wall_s"].as_f64()).collect();
+    let wall: Vec<f64> = frames.iter().skip(1).filter_map(|f| f["wall_s"].as_f64()).collect();
+    let spans: Vec<String> = args
+        .get(3)
+        .map(|a| a.split(',').filter_map(|s| s.parse::<usize>().ok()).collect::<Vec<_>>())
+        .unwrap_or_default()
+        .into_iter()
+        .filter(|&n| n <= wall.len())
+        .map(|n| {
+            let (mean, median) = mean_median(&wall[..n]);
+            format!("\"{n}\": {{\"mean_s\": {mean:.4}, \"median_s\": {median:.4}}}")
+        })
+        .collect();
     let faces: Vec<u64> = frames.iter().filter_map(|f| f["faces"].as_u64()).collect();
     let penetrations: u64 = frames.iter().filter_map(|f| f["penetrations"].as_u64()).sum();
     let mut stages: std::collections::BTreeMap<String, f64> = Default::default();
@@ -32,10 +45,7 @@ fn main() {
             }
         }
     }
-    let n = wall.len().max(1) as f64;
-    let mean = wall.iter().sum::<f64>() / n;
-    wall.sort_by(f64::total_cmp);
-    let median = if wall.is_empty() { 0.0 } else { wall[wall.len() / 2] };
+    let (mean, median) = mean_median(&wall);
 
     // Clearance per frame: obstacle files are obstacle_<name>_<frame>.obj beside frame_<frame>.obj.
     let mut names: Vec<String> = std::fs::read_dir(dir)
@@ -75,12 +85,21 @@ fn main() {
     println!(
         "{{\"frames\": {}, \"mean_s\": {mean:.4}, \"median_s\": {median:.4}, \"faces_at\": {{{}}}, \"max_faces\": {}, \
          \"min_clearance_m\": {clearance}, \"min_clearance_frame\": {worst_frame}, \"penetrations\": {penetrations}, \
-         \"total_s\": {:.2}, \"stage_s\": {{{}}}, \"error\": {}}}",
+         \"total_s\": {:.2}, \"spans\": {{{}}}, \"stage_s\": {{{}}}, \"error\": {}}}",
         wall.len(),
         at.join(", "),
         faces.iter().max().copied().unwrap_or(0),
         stats["total_wall_s"].as_f64().unwrap_or(0.0),
+        spans.join(", "),
         stage_json.join(", "),
         stats.get("error").map(|e| e.to_string()).unwrap_or_else(|| "null".into()),
     );
+}
+
+/// Mean and median of per-frame wall times.
+fn mean_median(wall: &[f64]) -> (f64, f64) {
+    let mut sorted = wall.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let mean = sorted.iter().sum::<f64>() / sorted.len().max(1) as f64;
+    (mean, sorted.get(sorted.len() / 2).copied().unwrap_or(0.0))
 }

@@ -97,6 +97,9 @@ fn confs_read_as_arcsim_reads_them() {
     assert_eq!(ball.transform_at(0.5).scale, 0.1);
     assert!((ball.transform_at(3.0).translate - Vec3::new(0.0, -1.5, 0.0)).norm() < 1e-12);
     assert!(sphere.warnings.is_empty(), "{:?}", sphere.warnings);
+    // ARCSim's remeshing always refines near obstacles (nearobs.cpp, 10 × thickness).
+    let remesh = s.cloths[0].remesh.as_ref().unwrap();
+    assert!(remesh.sizing.refine_obstacle && remesh.sizing.refine_compression == Some(0.005));
 
     let square = conf("square.json");
     assert_eq!(square.scene.frames, 325);

@@ -177,6 +177,10 @@ impl Conv<'_> {
         if let Some(a) = self.opt_num(m, "aspect_min", loc)? {
             fields.push(("aspect_min", J::Num(a)));
         }
+        // ARCSim always refines near obstacles: remeshing_step passes every node's nearest
+        // obstacle plane within 10 × repulsion thickness (nearobs.cpp) to the sizing's
+        // obstacle_metric; viewcloth's range is the same 10 × thickness.
+        fields.push(("refine_obstacle", J::Bool(true)));
         if let Some(combine) = magic.combine_tensors {
             fields.push(("combine", J::Str(if combine { "max" } else { "sum" }.into())));
         }
