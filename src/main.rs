@@ -5,6 +5,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+use viewcloth::camera::Camera;
 use viewcloth::scene::{self, InputError, RemeshMode, Scene};
 use viewcloth::sim::{resume, run_with_checkpoints, CheckpointOptions, ResumeOptions, RunError, RunOptions, SimError};
 
@@ -61,10 +62,15 @@ struct SimulateArgs {
     /// Also write each obstacle's world-space mesh per frame beside the cloth frames.
     #[arg(long)]
     export_obstacles: bool,
-    /// Override the remeshing mode of every cloth with a `remesh` block: `adaptive`, or
-    /// `uniform` (refined once to the minimum edge length, never remeshed).
-    #[arg(long, value_parser = ["uniform", "adaptive"])]
+    /// Override the remeshing mode of every cloth with a `remesh` block: `adaptive`, `uniform`
+    /// (refined once to the minimum edge length, never remeshed) or `view` (adaptive, scaled by
+    /// the camera's view factors; needs a camera).
+    #[arg(long, value_parser = ["uniform", "adaptive", "view"])]
     mode: Option<String>,
+    /// The shot camera (a camera JSON file) for view-dependent remeshing; implies `--mode view`
+    /// unless `--mode` is given.
+    #[arg(long, value_name = "FILE")]
+    camera: Option<PathBuf>,
     /// Write a checkpoint every N frames (and at the last), for `viewcloth resume`.
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
     checkpoint_every: Option<u64>,
@@ -138,7 +144,8 @@ fn run_failed(e: RunError) -> ExitCode {
 }
 
 fn simulate(args: SimulateArgs) -> ExitCode {
-    let SimulateArgs { scene, frames, out, threads, quiet, export_obstacles, mode, checkpoint_every, base } = args;
+    let SimulateArgs { scene, frames, out, threads, quiet, export_obstacles, mode, camera, checkpoint_every, base } =
+        args;
     if !set_threads(threads) {
         return ExitCode::from(EXIT_INPUT);
     }
@@ -159,7 +166,32 @@ fn simulate(args: SimulateArgs) -> ExitCode {
             return ExitCode::from(EXIT_INPUT);
         }
     };
-    let mode = mode.map(|m| if m == "uniform" { RemeshMode::Uniform } else { RemeshMode::Adaptive });
+    let camera_file = match camera.as_deref().map(std::path::absolute).transpose() {
+        Ok(file) => file,
+        Err(e) => {
+            eprintln!("error: --camera: {e}");
+            return ExitCode::from(EXIT_INPUT);
+        }
+    };
+    if let Some(file) = &camera_file {
+        match Camera::load(file) {
+            Ok(cam) => scene.camera = Some(cam),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(EXIT_INPUT);
+            }
+        }
+    }
+    let mode = match mode.as_deref() {
+        Some("uniform") => Some(RemeshMode::Uniform),
+        Some("adaptive") => Some(RemeshMode::Adaptive),
+        Some(_) => Some(RemeshMode::View),
+        None => camera_file.as_ref().map(|_| RemeshMode::View),
+    };
+    if mode == Some(RemeshMode::View) && scene.camera.is_none() {
+        eprintln!("error: --mode view: scene '{}' has no camera; pass --camera FILE", scene.name);
+        return ExitCode::from(EXIT_INPUT);
+    }
     if let Some(mode) = mode {
         if scene.set_remesh_mode(mode) == 0 {
             eprintln!("error: --mode: scene '{}' has no cloth with a remesh block", scene.name);
@@ -168,7 +200,7 @@ fn simulate(args: SimulateArgs) -> ExitCode {
     }
     let out_dir = out.unwrap_or_else(|| Path::new("out").join(&stem));
     let opts = RunOptions { out_dir: out_dir.clone(), frames: frames.map(|f| f as usize), quiet, export_obstacles };
-    let ck = checkpoint_every.map(|every| CheckpointOptions { every: every as usize, scene_file, mode });
+    let ck = checkpoint_every.map(|every| CheckpointOptions { every: every as usize, scene_file, mode, camera_file });
     match run_with_checkpoints(scene, &opts, ck.as_ref()) {
         Ok(stats) => {
             if !quiet {

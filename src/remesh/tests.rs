@@ -147,7 +147,7 @@ fn sharp_fold_refines_along_the_fold_only() {
     fold(&mut mesh);
     let p = sizing_params();
     for _ in 0..4 {
-        let vs = vertex_metrics(&mesh, &face_metrics(&mesh, &[Some(p.clone())], &[]));
+        let vs = vertex_metrics(&mesh, &face_metrics(&mesh, &[Some(p.clone())], &[], &[]));
         let (done, _) = remesh(&mesh, vs, vec![false; mesh.nodes.len()], &limits(p.size_min)).unwrap();
         mesh = done.mesh;
         fold(&mut mesh);

@@ -19,7 +19,8 @@ use crate::forces::wind::Wind;
 use crate::io::obj::ObjData;
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
-use crate::sizing::SizingParams;
+use crate::camera::Camera;
+use crate::sizing::{SizingParams, ViewParams};
 use material::Material;
 use motion::{Motion, Transform};
 
@@ -60,6 +61,16 @@ pub struct Cloth {
 pub enum RemeshMode {
     Adaptive,
     Uniform,
+    /// Adaptive, with the curvature and compression criteria scaled by the camera's view
+    /// factors (Koh et al. 2014).
+    View,
+}
+
+impl RemeshMode {
+    /// Remeshed every frame from its sizing field (adaptive, with or without view factors).
+    pub fn is_adaptive(self) -> bool {
+        matches!(self, RemeshMode::Adaptive | RemeshMode::View)
+    }
 }
 
 /// A cloth's resolved remeshing parameters.
@@ -69,6 +80,8 @@ pub struct Remesh {
     pub sizing: SizingParams,
     /// Remesh every this many frames.
     pub every: usize,
+    /// View factor parameters, used in `RemeshMode::View`.
+    pub view: ViewParams,
 }
 
 /// Pinned nodes, fixed, following a keyframed motion or following an obstacle, active during
@@ -229,6 +242,8 @@ pub struct Scene {
     pub handles: Vec<Handle>,
     pub obstacles: Vec<Obstacle>,
     pub collision: CollisionParams,
+    /// The shot camera, for view-dependent remeshing.
+    pub camera: Option<Camera>,
 }
 
 impl Scene {

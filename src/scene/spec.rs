@@ -39,6 +39,9 @@ pub struct SceneSpec {
     /// Collision handling; defaults apply when absent.
     #[serde(default)]
     pub collision: Option<CollisionSpec>,
+    /// Camera file (relative to the scene) for view-dependent remeshing (`mode: "view"`).
+    #[serde(default)]
+    pub camera: Option<String>,
 }
 
 #[derive(Deserialize, Debug, Clone, Default)]
@@ -147,6 +150,31 @@ pub struct RemeshSpec {
     /// Remesh every N frames (default 1).
     #[serde(default)]
     pub every: Option<i64>,
+    /// View-dependent sizing parameters (mode `view`; Koh et al. 2014), defaults when absent.
+    #[serde(default)]
+    pub view: Option<ViewSpec>,
+}
+
+/// View factor parameters (Koh et al. 2014, eqs. 1–10); each defaults to the paper's value.
+#[derive(Deserialize, Debug, Clone, Default)]
+#[serde(deny_unknown_fields)]
+pub struct ViewSpec {
+    #[serde(default)]
+    pub k_cos: Option<f64>,
+    #[serde(default)]
+    pub mu_back: Option<f64>,
+    #[serde(default)]
+    pub mu_out: Option<f64>,
+    #[serde(default)]
+    pub margin: Option<f64>,
+    #[serde(default)]
+    pub k_dist: Option<f64>,
+    #[serde(default)]
+    pub window: Option<f64>,
+    #[serde(default)]
+    pub hold: Option<f64>,
+    #[serde(default)]
+    pub two_sided: Option<bool>,
 }
 
 #[derive(Deserialize, Debug, Clone)]

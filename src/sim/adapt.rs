@@ -9,7 +9,8 @@ use crate::forces::RestState;
 use crate::math::{Mat2, Real};
 use crate::remesh::{remesh, Finished, RemeshLimits, RemeshStats};
 use crate::scene::RemeshMode;
-use crate::sizing::{face_metrics, vertex_metrics, ObstaclePlane, SizingParams};
+use crate::sizing::view::face_views;
+use crate::sizing::{face_metrics, vertex_metrics, FaceView, ObstaclePlane, SizingParams};
 use crate::solver::pattern::BlockPattern;
 
 use super::{SimError, Simulation};
@@ -22,7 +23,8 @@ impl Simulation {
     fn sizing_params(&self, mode: RemeshMode) -> Vec<Option<SizingParams>> {
         let mut out = vec![None; self.scene.materials.len()];
         for c in &self.scene.cloths {
-            if let Some(r) = c.remesh.as_ref().filter(|r| r.mode == mode) {
+            let runs_in = |r: &&crate::scene::Remesh| r.mode == mode || (mode == RemeshMode::Adaptive && r.mode.is_adaptive());
+            if let Some(r) = c.remesh.as_ref().filter(runs_in) {
                 out[c.material] = Some(r.sizing.clone());
             }
         }
@@ -68,6 +70,28 @@ impl Simulation {
         best.into_iter().map(|b| b.map(|(_, p)| p)).collect()
     }
 
+    /// The camera's view of every face of the view-dependent cloths (empty when there are none
+    /// or no camera): Koh et al. 2014's view factors over the lookahead window.
+    fn face_views(&mut self) -> Vec<Option<FaceView>> {
+        let Some(camera) = &self.scene.camera else { return Vec::new() };
+        let mut params = vec![None; self.scene.materials.len()];
+        let mut every = usize::MAX;
+        for c in &self.scene.cloths {
+            if let Some(r) = c.remesh.as_ref().filter(|r| r.mode == RemeshMode::View) {
+                params[c.material] = Some((r.view, r.sizing.size_min));
+                every = every.min(r.every);
+            }
+        }
+        if params.iter().all(Option::is_none) {
+            return Vec::new();
+        }
+        let clock = std::time::Instant::now();
+        let dt = self.scene.frame_time * every as Real;
+        let views = face_views(&self.mesh, camera, self.time, dt, &params);
+        self.timers.add("view", clock.elapsed().as_secs_f64());
+        views
+    }
+
     /// Remeshes the cloths in `mode` to their sizing field (for `Uniform`: once, to the
     /// minimum edge length). Rebuilds the topology-dependent state when anything changed.
     pub fn remesh(&mut self, mode: RemeshMode) -> Result<RemeshStats, SimError> {
@@ -75,9 +99,12 @@ impl Simulation {
         if params.iter().all(Option::is_none) {
             return Ok(RemeshStats::default());
         }
+        let views = if mode.is_adaptive() { self.face_views() } else { Vec::new() };
         let clock = std::time::Instant::now();
         let face = match mode {
-            RemeshMode::Adaptive => face_metrics(&self.mesh, &params, &self.obstacle_planes(&params)),
+            RemeshMode::Adaptive | RemeshMode::View => {
+                face_metrics(&self.mesh, &params, &self.obstacle_planes(&params), &views)
+            }
             RemeshMode::Uniform => (0..self.mesh.faces.len())
                 .map(|f| match &params[self.mesh.faces[f].material as usize] {
                     Some(p) => Mat2::identity() / (p.size_min * p.size_min),
@@ -90,7 +117,7 @@ impl Simulation {
         let clock = std::time::Instant::now();
         let size_min = params.iter().flatten().map(|p| p.size_min).fold(Real::INFINITY, Real::min);
         let aspect_min = params.iter().flatten().map(|p| p.aspect_min).fold(1.0, Real::min);
-        let limits = RemeshLimits { size_min, aspect_min, coarsen: mode == RemeshMode::Adaptive };
+        let limits = RemeshLimits { size_min, aspect_min, coarsen: mode.is_adaptive() };
         let preserved = self.preserved_nodes(&params);
         let (finished, stats) = remesh(&self.mesh, vsize, preserved, &limits)
             .map_err(|e| SimError::Mesh(format!("remeshing failed: {e}")))?;

@@ -27,7 +27,7 @@ use crate::solver::ImplicitSystem;
 use super::{adapt, SimError, Simulation};
 
 const MAGIC: &[u8; 8] = b"VCLOTHCK";
-const FORMAT_VERSION: u32 = 1;
+const FORMAT_VERSION: u32 = 2;
 /// File names: `checkpoint_<frame>.bin`.
 const PREFIX: &str = "checkpoint_";
 const SUFFIX: &str = ".bin";
@@ -49,6 +49,8 @@ pub struct RunRecord {
     pub scene_file: Option<PathBuf>,
     /// The `--mode` override, if any.
     pub mode: Option<RemeshMode>,
+    /// The `--camera` override (absolute), if any.
+    pub camera_file: Option<PathBuf>,
     /// `scene_fingerprint` of the scene as loaded (after the override).
     pub fingerprint: u64,
     /// Last frame of the run.
@@ -229,7 +231,15 @@ pub fn encode(run: &RunRecord, st: &SimState, stats: &RunStats) -> Vec<u8> {
         None => 0,
         Some(RemeshMode::Uniform) => 1,
         Some(RemeshMode::Adaptive) => 2,
+        Some(RemeshMode::View) => 3,
     });
+    match &run.camera_file {
+        Some(p) => {
+            w.u8(1);
+            w.str(&p.to_string_lossy());
+        }
+        None => w.u8(0),
+    }
     w.u64(run.fingerprint);
     w.usize(run.frames);
     w.usize(run.digits);
@@ -303,11 +313,18 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
         0 => None,
         1 => Some(RemeshMode::Uniform),
         2 => Some(RemeshMode::Adaptive),
+        3 => Some(RemeshMode::View),
         k => return Err(format!("bad mode tag {k}")),
+    };
+    let camera_file = match r.u8()? {
+        0 => None,
+        1 => Some(PathBuf::from(r.str()?)),
+        k => return Err(format!("bad camera tag {k}")),
     };
     let run = RunRecord {
         scene_file,
         mode,
+        camera_file,
         fingerprint: r.u64()?,
         frames: r.usize()?,
         digits: r.usize()?,
@@ -450,6 +467,7 @@ mod tests {
         let run = RunRecord {
             scene_file: Some("/a/b.json".into()),
             mode: Some(RemeshMode::Adaptive),
+            camera_file: Some("/a/cam.json".into()),
             fingerprint: 7,
             frames: 10,
             digits: 4,

@@ -79,6 +79,14 @@ fn collision_world(scene: &Scene, t: Real) -> Option<CollisionWorld> {
 
 impl Simulation {
     pub fn new(mut scene: Scene) -> Result<Self, SimError> {
+        let view_cloth = scene.cloths.iter().position(|c| c.remesh.as_ref().is_some_and(|r| r.mode == RemeshMode::View));
+        if let (Some(c), None) = (view_cloth, &scene.camera) {
+            return Err(SimError::Input(InputError {
+                file: scene.file.clone(),
+                location: Some(format!("cloths[{c}].remesh.mode")),
+                msg: "\"view\" needs a camera: give the scene a \"camera\" file or pass --camera".into(),
+            }));
+        }
         let mesh = std::mem::take(&mut scene.mesh);
         let rest_angles = scene.rest_angles(&mesh);
         let rest = RestState::new(&mesh, |e| rest_angles[e])

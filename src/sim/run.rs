@@ -10,6 +10,7 @@ use std::time::Instant;
 use crate::io::obj::{frame_obj, obstacle_obj};
 use crate::io::stats::{CollisionFrameStats, RemeshFrameStats, RunStats};
 use crate::io::write_atomic;
+use crate::camera::Camera;
 use crate::scene::{self, InputError, RemeshMode, Scene};
 
 use super::checkpoint::{self, CheckpointError, RunRecord};
@@ -32,6 +33,8 @@ pub struct CheckpointOptions {
     pub scene_file: Option<PathBuf>,
     /// The `--mode` override applied to the scene.
     pub mode: Option<RemeshMode>,
+    /// The `--camera` file applied to the scene (absolute).
+    pub camera_file: Option<PathBuf>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -68,6 +71,7 @@ pub fn run_with_checkpoints(
     let record = ck.map(|c| RunRecord {
         scene_file: c.scene_file.clone(),
         mode: c.mode,
+        camera_file: c.camera_file.clone(),
         fingerprint: checkpoint::scene_fingerprint(&scene),
         frames,
         digits,
@@ -78,7 +82,14 @@ pub fn run_with_checkpoints(
     let mut sim = Simulation::new(scene)?;
     std::fs::create_dir_all(&opts.out_dir).map_err(io_err(&opts.out_dir))?;
     let adaptive = is_adaptive(&sim.scene);
-    let mode = if adaptive { "adaptive" } else { "uniform" };
+    let view = sim.scene.cloths.iter().any(|c| c.remesh.as_ref().is_some_and(|r| r.mode == RemeshMode::View));
+    let mode = if view {
+        "view"
+    } else if adaptive {
+        "adaptive"
+    } else {
+        "uniform"
+    };
     let stats = RunStats { scene: sim.scene.name.clone(), mode: mode.into(), ..Default::default() };
     let out = Output { dir: &opts.out_dir, names, digits, export_obstacles: opts.export_obstacles, record, adaptive };
     out.frames(&mut sim, stats, 0, frames, opts.quiet, 0.0)
@@ -104,6 +115,9 @@ pub fn resume(dir: &Path, opts: &ResumeOptions) -> Result<RunStats, RunError> {
             scene::load_str(scene::DEFAULT_SCENE, &file, Path::new("."), name).map_err(RunError::Input)?
         }
     };
+    if let Some(file) = &record.camera_file {
+        scene.camera = Some(Camera::load(file).map_err(RunError::Input)?);
+    }
     if let Some(mode) = record.mode {
         scene.set_remesh_mode(mode);
     }
@@ -148,7 +162,7 @@ pub fn resume(dir: &Path, opts: &ResumeOptions) -> Result<RunStats, RunError> {
 }
 
 fn is_adaptive(scene: &Scene) -> bool {
-    scene.cloths.iter().any(|c| c.remesh.as_ref().is_some_and(|r| r.mode == RemeshMode::Adaptive))
+    scene.cloths.iter().any(|c| c.remesh.as_ref().is_some_and(|r| r.mode.is_adaptive()))
 }
 
 /// Removes temporary files of interrupted atomic writes (`.<name>.tmp<pid>`).

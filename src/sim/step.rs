@@ -221,7 +221,7 @@ impl Simulation {
             .scene
             .cloths
             .iter()
-            .filter_map(|c| c.remesh.as_ref().filter(|r| r.mode == RemeshMode::Adaptive).map(|r| r.every))
+            .filter_map(|c| c.remesh.as_ref().filter(|r| r.mode.is_adaptive()).map(|r| r.every))
             .min();
         if every.is_some_and(|e| self.frame % e == 0) {
             let s = self.remesh(RemeshMode::Adaptive)?;

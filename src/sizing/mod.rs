@@ -5,6 +5,7 @@
 //! minimum aspect ratio (eqs. 2–6 and §3.4; formulas as in DESIGN.md "Sizing field").
 
 pub mod tensor_max;
+pub mod view;
 
 use rayon::prelude::*;
 
@@ -12,6 +13,7 @@ use crate::forces::edge_angles;
 use crate::math::{eigen_sym2, Mat2, Mat3x2, Real, Vec2, Vec3};
 use crate::mesh::Mesh;
 pub use tensor_max::tensor_max;
+pub use view::{FaceView, ViewParams};
 
 /// How criteria are combined.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,6 +62,8 @@ pub struct FaceState {
     pub theta: [Real; 3],
     /// Nearest obstacle plane of each corner, if within range.
     pub planes: [Option<ObstaclePlane>; 3],
+    /// The camera's view of the face, in view-dependent mode.
+    pub view: Option<FaceView>,
 }
 
 /// Gradient in material space of a field given at the corners: [f₁ − f₀, f₂ − f₀] D_m⁻¹.
@@ -108,13 +112,13 @@ pub fn face_criteria(s: &FaceState, p: &SizingParams) -> Vec<Mat2> {
         }
         let m1 = shape.transpose() * shape / (dtheta * dtheta);
         let m2 = s2 / (dtheta * dtheta);
-        out.push(tensor_max(&[m1, m2]));
+        out.push(tensor_max(&[m1, m2]) * view_scale(s));
     }
     if let Some(c) = p.refine_compression {
         let f = material_gradient(&dm_inv, s.x);
         let e = f.transpose() * f - Mat2::identity();
         let d = e.transpose() * e - 4.0 * c * c * adjugate(&s2);
-        out.push(pos(&(-e + pos_sqrt(&d))) / (2.0 * c * c));
+        out.push(pos(&(-e + pos_sqrt(&d))) / (2.0 * c * c) * view_scale(s));
     }
     if let Some(dv) = p.refine_velocity {
         let gv = material_gradient(&dm_inv, s.v);
@@ -135,10 +139,23 @@ pub fn face_criteria(s: &FaceState, p: &SizingParams) -> Vec<Mat2> {
     out
 }
 
+/// μ² for the curvature and compression criteria in view-dependent mode (Koh et al. 2014,
+/// eq. 5: M / (μ⁻¹ Δ)² = μ² M / Δ²), 1 otherwise.
+fn view_scale(s: &FaceState) -> Real {
+    s.view.map_or(1.0, |v| v.mu * v.mu)
+}
+
 /// Combines and clamps: eigenvalues into [1/size_max², 1/size_min²], then λ_min ≥ aspect_min²·λ_max.
 pub fn clamp_metric(m: &Mat2, p: &SizingParams) -> Mat2 {
+    clamp_metric_to(m, p, p.size_min)
+}
+
+/// `clamp_metric` with the smallest edge `size_min` (Koh et al. 2014, eqs. 11–13, where it is
+/// the distance-dependent l_min,vd, at most size_max).
+fn clamp_metric_to(m: &Mat2, p: &SizingParams, size_min: Real) -> Mat2 {
+    let size_min = size_min.min(p.size_max);
     let (l, q) = eigen_sym2(m);
-    let (lo, hi) = (1.0 / (p.size_max * p.size_max), 1.0 / (p.size_min * p.size_min));
+    let (lo, hi) = (1.0 / (p.size_max * p.size_max), 1.0 / (size_min * size_min));
     let mut l = Vec2::new(l[0].clamp(lo, hi), l[1].clamp(lo, hi));
     let floor = p.aspect_min * p.aspect_min * l[1].max(l[0]);
     l = Vec2::new(l[0].max(floor), l[1].max(floor));
@@ -152,13 +169,18 @@ pub fn face_sizing(s: &FaceState, p: &SizingParams) -> Mat2 {
         Combine::Max => tensor_max(&criteria),
         Combine::Sum => criteria.iter().fold(Mat2::zeros(), |a, b| a + b),
     };
-    clamp_metric(&m, p)
+    clamp_metric_to(&m, p, s.view.map_or(p.size_min, |v| v.size_min))
 }
 
 /// Sizing of every face of `mesh` (clamped) with the parameters of its material (cloth),
 /// `params[material]`, zero for a cloth without; `planes[node]` is the nearest obstacle plane of
-/// each node within range.
-pub fn face_metrics(mesh: &Mesh, params: &[Option<SizingParams>], planes: &[Option<ObstaclePlane>]) -> Vec<Mat2> {
+/// each node within range; `views[face]`, when given, the camera's view of each face.
+pub fn face_metrics(
+    mesh: &Mesh,
+    params: &[Option<SizingParams>],
+    planes: &[Option<ObstaclePlane>],
+    views: &[Option<FaceView>],
+) -> Vec<Mat2> {
     let angles = edge_angles(mesh);
     let normals = mesh.node_normals();
     (0..mesh.faces.len())
@@ -176,6 +198,7 @@ pub fn face_metrics(mesh: &Mesh, params: &[Option<SizingParams>], planes: &[Opti
                 n: ids.map(|n| normals[n]),
                 theta: fe.map(|e| angles[e.idx()]),
                 planes: ids.map(|n| planes.get(n).copied().flatten()),
+                view: views.get(f).copied().flatten(),
             };
             face_sizing(&state, p)
         })
@@ -222,6 +245,7 @@ mod tests {
             n: [Vec3::z(); 3],
             theta: [0.0; 3],
             planes: [None; 3],
+            view: None,
         }
     }
 
@@ -255,6 +279,39 @@ mod tests {
         f.v = [Vec3::zeros(), Vec3::new(0.0, 0.0, 1.0), Vec3::zeros()];
         let m = face_sizing(&f, &p);
         assert!(m[(0, 0)] > m[(1, 1)] * 2.0, "{m}");
+    }
+
+    #[test]
+    fn view_factor_scales_curvature_and_compression_by_mu_squared() {
+        // Koh et al. 2014, eq. 5: M_crv / (μ⁻¹ Δn)² and M_cmp / (μ⁻¹ c)²; velocity unchanged.
+        let p = params();
+        let mut f = flat_face();
+        f.theta = [0.3, 0.0, 0.0];
+        f.x = f.u.map(|u| Vec3::new(0.98 * u.x, u.y, 0.0));
+        f.v = [Vec3::zeros(), Vec3::new(0.0, 0.0, 1.0), Vec3::zeros()];
+        let plain = face_criteria(&f, &p);
+        f.view = Some(FaceView { mu: 0.5, size_min: p.size_min });
+        let seen = face_criteria(&f, &p);
+        assert!(plain[0].norm() > 0.0 && plain[1].norm() > 0.0 && plain[2].norm() > 0.0);
+        assert!((seen[0] - plain[0] * 0.25).norm() <= 1e-12 * plain[0].norm(), "{} vs {}", seen[0], plain[0]);
+        assert!((seen[1] - plain[1] * 0.25).norm() <= 1e-12 * plain[1].norm(), "{} vs {}", seen[1], plain[1]);
+        assert_eq!(seen[2], plain[2]);
+    }
+
+    #[test]
+    fn view_minimum_edge_caps_the_metric() {
+        // Eqs. 10–11: eigenvalues at most l_min,vd⁻², and never below size_max⁻².
+        let p = params();
+        let mut f = flat_face();
+        f.theta = [3.0, 3.0, 3.0];
+        let fine = face_sizing(&f, &p);
+        assert!((eigen_sym2(&fine).0.max() - 1.0 / (p.size_min * p.size_min)).abs() < 1e-6);
+        f.view = Some(FaceView { mu: 1.0, size_min: 0.05 });
+        let far = face_sizing(&f, &p);
+        assert!((eigen_sym2(&far).0.max() - 400.0).abs() < 1e-9, "{far}");
+        f.view = Some(FaceView { mu: 1.0, size_min: 10.0 });
+        let beyond = face_sizing(&f, &p);
+        assert!((eigen_sym2(&beyond).0.max() - 1.0 / (p.size_max * p.size_max)).abs() < 1e-9, "{beyond}");
     }
 
     #[test]

@@ -5,7 +5,9 @@ use std::path::{Path, PathBuf};
 
 use super::material::resolve;
 use super::motion::{KeyVelocity, Keyframe, Motion, Transform};
-use super::spec::{ClothSpec, CollisionSpec, HandleSpec, KeyframeSpec, MotSpec, RemeshSpec, SceneSpec, TransformSpec};
+use super::spec::{
+    ClothSpec, CollisionSpec, HandleSpec, KeyframeSpec, MotSpec, RemeshSpec, SceneSpec, TransformSpec, ViewSpec,
+};
 use super::{
     Cloth, CollisionParams, FollowObstacle, Handle, InputError, Obstacle, ObstacleShape, Remesh, RemeshMode, Scene,
 };
@@ -13,7 +15,8 @@ use crate::forces::wind::Wind;
 use crate::io::obj::{read_obj, ObjData};
 use crate::math::{cross2, Vec2, Vec3};
 use crate::mesh::{rectangle, Face, Mesh, MeshError, Node, NodeId, Vert, VertId};
-use crate::sizing::{Combine, SizingParams};
+use crate::camera::Camera;
+use crate::sizing::{Combine, SizingParams, ViewParams};
 
 /// The built-in default shot (`viewcloth simulate` with no scene).
 pub const DEFAULT_SCENE: &str = include_str!("../../../scenes/hanging_sheet.json");
@@ -157,6 +160,10 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
         handles: Vec::new(),
         obstacles: Vec::new(),
         collision: collision_params(ctx, spec.collision.as_ref())?,
+        camera: match &spec.camera {
+            Some(rel) => Some(Camera::load(&ctx.resolve(rel))?),
+            None => None,
+        },
     };
     // Obstacles first: handles may follow one.
     for (o, os) in spec.obstacles.iter().enumerate() {
@@ -211,12 +218,15 @@ fn remesh_params(ctx: &Ctx, path: &str, r: &RemeshSpec) -> Res<Remesh> {
     let mode = match r.mode.as_deref() {
         None | Some("adaptive") => RemeshMode::Adaptive,
         Some("uniform") => RemeshMode::Uniform,
+        Some("view") => RemeshMode::View,
         Some(other) => {
-            return Err(
-                ctx.err(format!("{path}.mode"), format!("expected \"adaptive\" or \"uniform\", got \"{other}\""))
-            )
+            return Err(ctx.err(
+                format!("{path}.mode"),
+                format!("expected \"adaptive\", \"uniform\" or \"view\", got \"{other}\""),
+            ))
         }
     };
+    let view = view_params(ctx, &format!("{path}.view"), r.view.as_ref())?;
     let opt = |field: &str, v: Option<f64>| v.map(|x| positive(ctx, &format!("{path}.{field}"), x)).transpose();
     let size_min = positive(ctx, &format!("{path}.size[0]"), r.size[0])?;
     let size_max = positive(ctx, &format!("{path}.size[1]"), r.size[1])?;
@@ -253,7 +263,36 @@ fn remesh_params(ctx: &Ctx, path: &str, r: &RemeshSpec) -> Res<Remesh> {
             combine,
         },
         every,
+        view,
     })
+}
+
+/// Koh et al.'s view factor parameters, each checked against the range its equation needs.
+fn view_params(ctx: &Ctx, path: &str, v: Option<&ViewSpec>) -> Res<ViewParams> {
+    let mut p = ViewParams::default();
+    let Some(v) = v else { return Ok(p) };
+    let check = |field: &str, x: Option<f64>, lo: f64, hi: f64, open_lo: bool, into: &mut f64| -> Res<()> {
+        if let Some(x) = x {
+            let ok = x.is_finite() && (if open_lo { x > lo } else { x >= lo }) && x <= hi;
+            if !ok {
+                let range = if open_lo { format!("({lo}, {hi}]") } else { format!("[{lo}, {hi}]") };
+                return Err(ctx.err(format!("{path}.{field}"), format!("expected a number in {range}, got {x}")));
+            }
+            *into = x;
+        }
+        Ok(())
+    };
+    check("k_cos", v.k_cos, 0.0, 1.0, false, &mut p.k_cos)?;
+    check("mu_back", v.mu_back, 0.0, 1.0, true, &mut p.mu_back)?;
+    check("mu_out", v.mu_out, 0.0, 1.0, true, &mut p.mu_out)?;
+    check("margin", v.margin, 0.0, 1e3, false, &mut p.margin)?;
+    check("k_dist", v.k_dist, 0.0, 1.0, false, &mut p.k_dist)?;
+    check("window", v.window, 0.0, 1e3, false, &mut p.window)?;
+    check("hold", v.hold, 0.0, 1e3, false, &mut p.hold)?;
+    if let Some(b) = v.two_sided {
+        p.two_sided = b;
+    }
+    Ok(p)
 }
 
 fn non_negative(ctx: &Ctx, path: &str, v: f64) -> Res<f64> {

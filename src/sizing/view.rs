@@ -1,0 +1,195 @@
+//! View factors (Koh, Narain & O'Brien 2014, "View-dependent adaptive cloth simulation",
+//! eqs. 1–13): a per-face μ ∈ (0, 1] from a scripted camera, whose square scales the
+//! curvature and compression criteria of the sizing field (eq. 5), and a minimum edge length
+//! that grows with the distance to the camera (eq. 10).
+//!
+//! - orientation: μ₁ blends μ_back and 1 by a non-uniformly scaled cosine of the angle between
+//!   the face normal and the direction to the eye (eqs. 1–2);
+//! - frustum: μ₂ blends μ₁ towards μ_out over a margin outside the frustum (eqs. 3–4);
+//! - lookahead: μ′₃ is the weighted maximum of μ₂ over camera times around the current one,
+//!   weight 1 now and for the next `hold` seconds, then falling linearly to 0 over `window`
+//!   seconds (and backwards over `window`), so that cloth is refined before it comes into view
+//!   and stays refined briefly after it leaves (eqs. 6–9).
+//!
+//! The cloth's motion over the window is not predicted (the paper's choice): the current
+//! geometry is seen from each camera time.
+
+use rayon::prelude::*;
+
+use crate::camera::Camera;
+use crate::math::{Real, Vec3};
+use crate::mesh::Mesh;
+
+/// Koh et al.'s parameters (their values as defaults).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ViewParams {
+    /// Share of the scaled cosine's range given to back-facing orientations (eq. 1).
+    pub k_cos: Real,
+    /// View factor of a face seen edge-on from behind (eq. 2).
+    pub mu_back: Real,
+    /// View factor outside the frustum beyond the margin (eq. 3).
+    pub mu_out: Real,
+    /// Margin (m) over which μ falls to μ_out outside the frustum (eq. 4).
+    pub margin: Real,
+    /// Minimum edge length per metre of distance to the eye (eq. 10).
+    pub k_dist: Real,
+    /// Lookahead window (s) over which the weights fall to 0 (eqs. 6–8).
+    pub window: Real,
+    /// Time (s) ahead held at full weight (eq. 9).
+    pub hold: Real,
+    /// Both sides of the cloth can be seen: orientation uses |cos θ|. Koh et al. coarsen the
+    /// back side (a garment's inside); a single-layer sheet is visible from both sides.
+    pub two_sided: bool,
+}
+
+impl Default for ViewParams {
+    fn default() -> Self {
+        ViewParams {
+            k_cos: 0.2,
+            mu_back: 0.1,
+            mu_out: 0.1,
+            margin: 0.2,
+            k_dist: 0.005,
+            window: 0.4,
+            hold: 0.2,
+            two_sided: true,
+        }
+    }
+}
+
+/// What the sizing of one face needs from the camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FaceView {
+    /// μ′₃ (eq. 9).
+    pub mu: Real,
+    /// l_min,vd = max(l_min, k_dist · d) (eq. 10), d the distance to the eye now.
+    pub size_min: Real,
+}
+
+/// Non-uniformly scaled cosine, eq. 1.
+pub fn scaled_cos(cos: Real, k_cos: Real) -> Real {
+    if cos <= 0.0 {
+        k_cos * (cos + 1.0)
+    } else {
+        (1.0 - k_cos) * cos + k_cos
+    }
+}
+
+/// Orientation view factor μ₁, eq. 2.
+pub fn mu_orientation(cos: Real, p: &ViewParams) -> Real {
+    let c = scaled_cos(if p.two_sided { cos.abs() } else { cos }, p.k_cos);
+    (1.0 - c) * p.mu_back + c
+}
+
+/// μ₂ from μ₁ and the signed distance `d` to the frustum (negative inside), eqs. 3–4.
+pub fn mu_frustum(mu1: Real, d: Real, p: &ViewParams) -> Real {
+    let delta = if p.margin > 0.0 { (d / p.margin).clamp(0.0, 1.0) } else if d > 0.0 { 1.0 } else { 0.0 };
+    (1.0 - delta) * mu1 + delta * p.mu_out
+}
+
+/// Camera time offsets (s) and weights of the lookahead window, eqs. 6–9: the current time and
+/// `hold` ahead at weight 1, then `window` more each way with weights 1 − i/m, sampled every
+/// `dt` seconds (the remeshing interval).
+pub fn lookahead(dt: Real, p: &ViewParams) -> Vec<(Real, Real)> {
+    let m = (p.window / dt).round() as usize;
+    let n = (p.hold / dt).round() as usize;
+    let mut out = vec![(0.0, 1.0)];
+    for j in 1..=n {
+        out.push((j as Real * dt, 1.0));
+    }
+    for i in 1..m {
+        let w = 1.0 - i as Real / m as Real;
+        out.push(((n + i) as Real * dt, w));
+        out.push((-(i as Real) * dt, w));
+    }
+    out
+}
+
+/// View factor and minimum edge length of every face at time `t`, remeshing every `dt`
+/// seconds. `params[material]` holds the view parameters and minimum edge length of each
+/// view-dependent cloth; faces of other cloths get `None`.
+pub fn face_views(
+    mesh: &Mesh,
+    camera: &Camera,
+    t: Real,
+    dt: Real,
+    params: &[Option<(ViewParams, Real)>],
+) -> Vec<Option<FaceView>> {
+    let samples: Vec<Vec<_>> = params
+        .iter()
+        .map(|p| match p {
+            Some((p, _)) => lookahead(dt, p).into_iter().map(|(off, w)| (camera.view_at(t + off), w)).collect(),
+            None => Vec::new(),
+        })
+        .collect();
+    let now = camera.view_at(t);
+    (0..mesh.faces.len())
+        .into_par_iter()
+        .map(|f| {
+            let material = mesh.faces[f].material as usize;
+            let (p, size_min) = params.get(material).copied().flatten()?;
+            let x = mesh.face_nodes(f).map(|n| mesh.nodes[n].x);
+            let centroid: Vec3 = (x[0] + x[1] + x[2]) / 3.0;
+            let normal = (x[1] - x[0]).cross(&(x[2] - x[0])).try_normalize(0.0).unwrap_or_else(Vec3::zeros);
+            let mu = samples[material]
+                .iter()
+                .map(|(view, w)| {
+                    let cos = normal.dot(&(view.eye - centroid).try_normalize(0.0).unwrap_or_else(Vec3::zeros));
+                    w * mu_frustum(mu_orientation(cos, &p), view.frustum_distance(&centroid), &p)
+                })
+                .fold(0.0, Real::max);
+            Some(FaceView { mu, size_min: size_min.max(p.k_dist * now.eye_distance(&centroid)) })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scaled_cosine_gives_a_fifth_of_its_range_to_back_faces() {
+        let k = 0.2;
+        assert_eq!(scaled_cos(-1.0, k), 0.0);
+        assert_eq!(scaled_cos(0.0, k), k);
+        assert!((scaled_cos(1.0, k) - 1.0).abs() < 1e-15);
+        assert!((scaled_cos(0.5, k) - 0.6).abs() < 1e-15);
+        assert!((scaled_cos(-0.5, k) - 0.1).abs() < 1e-15);
+    }
+
+    #[test]
+    fn orientation_factor_runs_from_mu_back_to_one() {
+        let one_sided = ViewParams { two_sided: false, ..Default::default() };
+        assert!((mu_orientation(1.0, &one_sided) - 1.0).abs() < 1e-15);
+        assert!((mu_orientation(-1.0, &one_sided) - 0.1).abs() < 1e-15);
+        // Edge-on: μ_back + k_cos (1 − μ_back).
+        assert!((mu_orientation(0.0, &one_sided) - 0.28).abs() < 1e-15);
+        let two_sided = ViewParams::default();
+        assert!((mu_orientation(-1.0, &two_sided) - 1.0).abs() < 1e-15);
+    }
+
+    #[test]
+    fn frustum_factor_falls_to_mu_out_over_the_margin() {
+        let p = ViewParams::default();
+        assert_eq!(mu_frustum(0.8, -1.0, &p), 0.8);
+        assert_eq!(mu_frustum(0.8, 0.0, &p), 0.8);
+        assert!((mu_frustum(0.8, 0.1, &p) - 0.45).abs() < 1e-15);
+        assert!((mu_frustum(0.8, 5.0, &p) - 0.1).abs() < 1e-15);
+    }
+
+    #[test]
+    fn lookahead_holds_then_falls_linearly_both_ways() {
+        let p = ViewParams { window: 0.4, hold: 0.2, ..Default::default() };
+        let w = lookahead(0.1, &p);
+        let at = |t: Real| w.iter().find(|(o, _)| (o - t).abs() < 1e-9).map(|(_, w)| *w);
+        assert_eq!(at(0.0), Some(1.0));
+        assert_eq!(at(0.1), Some(1.0));
+        assert_eq!(at(0.2), Some(1.0));
+        assert_eq!(at(0.3), Some(0.75));
+        assert_eq!(at(0.5), Some(0.25));
+        assert_eq!(at(0.6), None, "weight 0 at the window's end is not sampled");
+        assert_eq!(at(-0.1), Some(0.75));
+        assert_eq!(at(-0.3), Some(0.25));
+        assert_eq!(at(-0.4), None);
+    }
+}
