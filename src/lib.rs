@@ -1,9 +1,11 @@
 //! viewcloth: a film cloth simulator.
 //!
 //! Scene files → implicit cloth integration (Baraff & Witkin 1998) → one OBJ mesh per frame.
-//! Modules follow the pipeline: `scene` (input), `mesh` (material and world space), `forces`
-//! (element kernels), `solver` (global implicit system), `sim` (the step and the run), `io`.
+//! Modules follow the pipeline: `scene` and `camera` (input), `mesh` (material and world space),
+//! `forces` (element kernels), `solver` (global implicit system), `sim` (the step and the run),
+//! `io`.
 
+pub mod camera;
 pub mod collision;
 pub mod forces;
 pub mod io;
