@@ -48,19 +48,20 @@ fn areas_in_and_out(dir: &Path, s: &RunStats, camera: &Camera) -> (f64, f64) {
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let scene_path = PathBuf::from(args.get(1).cloned().unwrap_or_else(|| "scenes/sheet_on_sphere.json".into()));
-    let camera_path =
-        PathBuf::from(args.get(2).cloned().unwrap_or_else(|| "cameras/sheet_on_sphere_pan.json".into()));
+    let camera_path = PathBuf::from(args.get(2).cloned().unwrap_or_else(|| "cameras/sheet_on_sphere_pan.json".into()));
     let frames: usize = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(40);
     let camera = Camera::load(&camera_path).unwrap_or_else(|e| panic!("{e}"));
     println!("scene `{}`, camera `{}`, {frames} frames\n", scene_path.display(), camera_path.display());
-    println!("| mode | wall s (frames 1..) | s/frame | mean faces | view stage | face area in frame | beyond the margin |");
+    println!(
+        "| mode | wall s (frames 1..) | s/frame | mean faces | view stage | face area in frame | beyond the margin |"
+    );
     println!("|---|---:|---:|---:|---:|---:|---:|");
     let mut times = Vec::new();
     for mode in [RemeshMode::Adaptive, RemeshMode::View] {
         let (s, dir) = simulate(&scene_path, &camera, mode, frames);
         let wall: f64 = s.frames.iter().skip(1).map(|f| f.wall_s).sum();
         let faces = s.frames.iter().map(|f| f.faces as f64).sum::<f64>() / s.frames.len() as f64;
-        let view: f64 = s.frames.iter().filter_map(|f| f.stage_s.get("view")).sum();
+        let view: f64 = s.frames.iter().filter_map(|f| f.stage_s.get("view")).sum::<f64>() + 0.0;
         let (ai, ao) = areas_in_and_out(&dir, &s, &camera);
         println!(
             "| {mode:?} | {wall:.1} | {:.3} | {faces:.0} | {:.1}% | {:.2} cm² | {:.2} cm² |",
@@ -71,9 +72,5 @@ fn main() {
         );
         times.push((wall, faces));
     }
-    println!(
-        "\nadaptive / view: wall time {:.2}×, faces {:.2}×",
-        times[0].0 / times[1].0,
-        times[0].1 / times[1].1
-    );
+    println!("\nadaptive / view: wall time {:.2}×, faces {:.2}×", times[0].0 / times[1].0, times[0].1 / times[1].1);
 }

@@ -23,7 +23,7 @@ enum Command {
     /// Continue a run from the last checkpoint in its output directory (the frames are
     /// identical to an uninterrupted run's).
     Resume(ResumeArgs),
-    /// Validate scene files (or ARCSim confs) and the files they reference, without simulating.
+    /// Validate scene files (or ARCSim confs, or camera files) and the files they reference, without simulating.
     Check {
         #[arg(required = true)]
         files: Vec<PathBuf>,
@@ -243,8 +243,9 @@ fn resume_run(args: ResumeArgs) -> ExitCode {
 fn check(files: &[PathBuf], base: Option<&Path>) -> ExitCode {
     let mut ok = true;
     for f in files {
-        match load_warn(f, base) {
-            Ok(_) => println!("{}: ok", f.display()),
+        let checked = if is_camera_file(f) { Camera::load(f).map(|_| ()) } else { load_warn(f, base).map(|_| ()) };
+        match checked {
+            Ok(()) => println!("{}: ok", f.display()),
             Err(e) => {
                 eprintln!("error: {e}");
                 ok = false;
@@ -256,6 +257,13 @@ fn check(files: &[PathBuf], base: Option<&Path>) -> ExitCode {
     } else {
         ExitCode::from(EXIT_INPUT)
     }
+}
+
+/// A camera file (`cameras/*.json`): a JSON object with `keys` and no `cloths`.
+fn is_camera_file(path: &Path) -> bool {
+    let Ok(text) = std::fs::read_to_string(path) else { return false };
+    let Ok(serde_json::Value::Object(m)) = serde_json::from_str::<serde_json::Value>(&text) else { return false };
+    m.contains_key("keys") && !m.contains_key("cloths")
 }
 
 fn convert(conf: &Path, out: &Path, base: Option<&Path>) -> ExitCode {

@@ -171,6 +171,7 @@ fn restored_state_continues_bitwise() {
     let run = RunRecord {
         scene_file: Some(file.clone()),
         mode: None,
+        camera_file: None,
         fingerprint: checkpoint::scene_fingerprint(&load()),
         frames: FRAMES,
         digits: 4,

@@ -52,9 +52,9 @@ fn stages(stats: &Value) -> Vec<String> {
 
 #[test]
 fn the_mesh_follows_the_camera_and_costs_fewer_faces_than_adaptive() {
-    let frames = "20";
-    let cam = camera();
-    let view = simulate(&temp_dir("view_pan"), &["--frames", frames, "--camera", cam.to_str().unwrap()]);
+    let frames = "40";
+    let cam_file = camera();
+    let view = simulate(&temp_dir("view_pan"), &["--frames", frames, "--camera", cam_file.to_str().unwrap()]);
     let adaptive = simulate(&temp_dir("view_adaptive"), &["--frames", frames]);
     assert_eq!(view["mode"], "view");
     assert!(stages(&view).iter().any(|s| s == "view"), "{:?}", stages(&view));
@@ -67,7 +67,7 @@ fn the_mesh_follows_the_camera_and_costs_fewer_faces_than_adaptive() {
 
     // Where the camera looks at the last frame, faces are smaller (in material space) than
     // where it does not.
-    let cam = Camera::load(&camera()).unwrap();
+    let cam = Camera::load(&cam_file).unwrap();
     let t = fr.last().unwrap()["time"].as_f64().unwrap();
     let v = cam.view_at(t);
     let obj = read_obj(&temp_dir_path("view_pan").join(format!("frame_{frames:0>4}.obj"))).unwrap();
@@ -121,8 +121,28 @@ fn a_resumed_view_run_matches_an_uninterrupted_one() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     for f in 4..=6 {
         let name = format!("frame_{f:04}.obj");
-        assert!(std::fs::read(whole.join(&name)).unwrap() == std::fs::read(parts.join(&name)).unwrap(), "{name} differs");
+        assert!(
+            std::fs::read(whole.join(&name)).unwrap() == std::fs::read(parts.join(&name)).unwrap(),
+            "{name} differs"
+        );
     }
+}
+
+#[test]
+fn check_validates_camera_files() {
+    let cam = camera();
+    let o = viewcloth(&["check", cam.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let dir = temp_dir("view_bad_camera");
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("cam.json");
+    let text = std::fs::read_to_string(&cam).unwrap().replacen("\"fov\": 25", "\"fov\": 180", 1);
+    std::fs::write(&bad, text).unwrap();
+    let o = viewcloth(&["check", bad.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("keys[0].fov"), "{err}");
 }
 
 #[test]
@@ -139,7 +159,7 @@ fn view_mode_without_a_camera_is_refused_in_one_line() {
     // The same from a scene file that asks for view mode.
     let dir = temp_dir("view_scene_mode");
     std::fs::create_dir_all(&dir).unwrap();
-    let text = std::fs::read_to_string(scene()).unwrap().replace("\"mode\": \"adaptive\"", "\"mode\": \"view\"");
+    let text = std::fs::read_to_string(&scene).unwrap().replace("\"mode\": \"adaptive\"", "\"mode\": \"view\"");
     let file = dir.join("scene.json");
     std::fs::write(&file, text).unwrap();
     let o = viewcloth(&["check", file.to_str().unwrap()]);

@@ -15,11 +15,11 @@ pub use measured::read_measured;
 
 use std::path::PathBuf;
 
+use crate::camera::Camera;
 use crate::forces::wind::Wind;
 use crate::io::obj::ObjData;
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
-use crate::camera::Camera;
 use crate::sizing::{SizingParams, ViewParams};
 use material::Material;
 use motion::{Motion, Transform};

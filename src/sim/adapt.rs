@@ -23,7 +23,8 @@ impl Simulation {
     fn sizing_params(&self, mode: RemeshMode) -> Vec<Option<SizingParams>> {
         let mut out = vec![None; self.scene.materials.len()];
         for c in &self.scene.cloths {
-            let runs_in = |r: &&crate::scene::Remesh| r.mode == mode || (mode == RemeshMode::Adaptive && r.mode.is_adaptive());
+            let runs_in =
+                |r: &&crate::scene::Remesh| r.mode == mode || (mode == RemeshMode::Adaptive && r.mode.is_adaptive());
             if let Some(r) = c.remesh.as_ref().filter(runs_in) {
                 out[c.material] = Some(r.sizing.clone());
             }

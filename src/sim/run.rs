@@ -7,10 +7,10 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use crate::camera::Camera;
 use crate::io::obj::{frame_obj, obstacle_obj};
 use crate::io::stats::{CollisionFrameStats, RemeshFrameStats, RunStats};
 use crate::io::write_atomic;
-use crate::camera::Camera;
 use crate::scene::{self, InputError, RemeshMode, Scene};
 
 use super::checkpoint::{self, CheckpointError, RunRecord};

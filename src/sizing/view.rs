@@ -83,7 +83,13 @@ pub fn mu_orientation(cos: Real, p: &ViewParams) -> Real {
 
 /// μ₂ from μ₁ and the signed distance `d` to the frustum (negative inside), eqs. 3–4.
 pub fn mu_frustum(mu1: Real, d: Real, p: &ViewParams) -> Real {
-    let delta = if p.margin > 0.0 { (d / p.margin).clamp(0.0, 1.0) } else if d > 0.0 { 1.0 } else { 0.0 };
+    let delta = if p.margin > 0.0 {
+        (d / p.margin).clamp(0.0, 1.0)
+    } else if d > 0.0 {
+        1.0
+    } else {
+        0.0
+    };
     (1.0 - delta) * mu1 + delta * p.mu_out
 }
 
