@@ -37,22 +37,7 @@ pub(super) fn read(path: &Path) -> Res<Camera> {
 }
 
 pub(super) fn parse(text: &str, file: &Path) -> Res<Camera> {
-    let de = &mut serde_json::Deserializer::from_str(text);
-    let spec: CameraSpec = serde_path_to_error::deserialize(&mut *de).map_err(|e| {
-        let path = e.path().to_string();
-        // A syntax error has no meaningful JSON path: point at its line (the column is in the message).
-        let inner = e.inner();
-        let loc = if inner.is_syntax() || inner.is_eof() {
-            format!("line {}", inner.line())
-        } else if path == "." {
-            "JSON".to_string()
-        } else {
-            path
-        };
-        err(file, loc, inner.to_string())
-    })?;
-    // Trailing text after the object is an error too (as serde_json::from_str has it).
-    de.end().map_err(|e| err(file, format!("line {}", e.line()), e.to_string()))?;
+    let spec: CameraSpec = crate::io::json::parse(text).map_err(|(loc, msg)| err(file, loc, msg))?;
     build(file, spec)
 }
 

@@ -1,5 +1,6 @@
 //! Files in and out: OBJ meshes, atomic writes, run statistics.
 
+pub mod json;
 pub mod obj;
 pub mod stats;
 

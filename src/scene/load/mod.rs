@@ -53,20 +53,7 @@ pub fn check_file(path: &Path) -> Res<()> {
 /// `default_name` is used when the scene has no `name`.
 pub fn load_str(text: &str, file: &Path, base: &Path, default_name: &str) -> Res<Scene> {
     let ctx = Ctx { file, base };
-    let de = &mut serde_json::Deserializer::from_str(text);
-    let spec: SceneSpec = serde_path_to_error::deserialize(de).map_err(|e| {
-        let path = e.path().to_string();
-        // A syntax error has no meaningful JSON path: point at its line (the column is in the message).
-        let inner = e.inner();
-        let loc = if inner.is_syntax() || inner.is_eof() {
-            format!("line {}", inner.line())
-        } else if path == "." {
-            "JSON".to_string()
-        } else {
-            path
-        };
-        ctx.err(loc, inner.to_string())
-    })?;
+    let spec: SceneSpec = crate::io::json::parse(text).map_err(|(loc, msg)| ctx.err(loc, msg))?;
     build(&ctx, spec, default_name)
 }
 
