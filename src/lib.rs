@@ -7,6 +7,7 @@
 
 pub mod camera;
 pub mod collision;
+pub mod compare;
 pub mod forces;
 pub mod io;
 pub mod math;

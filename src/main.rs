@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 use viewcloth::camera::Camera;
+use viewcloth::compare::{compare, markdown, CompareOptions};
 use viewcloth::scene::{self, InputError, RemeshMode, Scene};
 use viewcloth::sim::{resume, run_with_checkpoints, CheckpointOptions, ResumeOptions, RunError, RunOptions, SimError};
 
@@ -31,6 +32,9 @@ enum Command {
         #[arg(long)]
         base: Option<PathBuf>,
     },
+    /// Run a shot in several remeshing modes and report each one's error against a reference,
+    /// seen from the shot camera, with its run time (compare.json, compare.md, compare.svg).
+    Compare(CompareArgs),
     /// Convert an ARCSim conf into a viewcloth scene file.
     Convert {
         conf: PathBuf,
@@ -90,6 +94,43 @@ struct ResumeArgs {
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
     threads: Option<u64>,
     /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+#[derive(clap::Args)]
+struct CompareArgs {
+    /// Scene file (JSON).
+    scene: PathBuf,
+    /// The shot camera (default: the scene's `camera`).
+    #[arg(long, value_name = "FILE")]
+    camera: Option<PathBuf>,
+    /// Number of frames to simulate (overrides the scene).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    frames: Option<u64>,
+    /// Output directory (default: out/<scene file stem>-compare/).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Modes compared with the reference, comma-separated.
+    #[arg(long, default_value = "adaptive,view", value_delimiter = ',', value_parser = ["uniform", "adaptive", "view"])]
+    modes: Vec<String>,
+    /// An existing run directory to use as the reference (default: a uniform run at the
+    /// adaptive minimum edge length, simulated here). No chaos floor is run then.
+    #[arg(long, value_name = "DIR")]
+    reference: Option<PathBuf>,
+    /// Skip the chaos-floor run (the reference re-run from perturbed positions).
+    #[arg(long)]
+    no_floor: bool,
+    /// Image size of the visible error, WIDTHxHEIGHT.
+    #[arg(long, default_value = "960x540")]
+    size: String,
+    /// Compare every N-th frame.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
+    every: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
+    threads: Option<u64>,
+    /// Only the table at the end.
     #[arg(long)]
     quiet: bool,
 }
@@ -259,6 +300,60 @@ fn check(files: &[PathBuf], base: Option<&Path>) -> ExitCode {
     }
 }
 
+fn compare_modes(args: CompareArgs) -> ExitCode {
+    if !set_threads(args.threads) {
+        return ExitCode::from(EXIT_INPUT);
+    }
+    let size = args.size.split_once('x').and_then(|(w, h)| Some((w.parse::<usize>().ok()?, h.parse::<usize>().ok()?)));
+    let Some((width, height)) = size.filter(|&(w, h)| (16..=8192).contains(&w) && (16..=8192).contains(&h)) else {
+        eprintln!("error: --size: expected WIDTHxHEIGHT with each in 16..=8192, got \"{}\"", args.size);
+        return ExitCode::from(EXIT_INPUT);
+    };
+    let (mut scene, stem) = match load(&Some(args.scene.clone()), None) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_INPUT);
+        }
+    };
+    if let Some(file) = &args.camera {
+        match Camera::load(file) {
+            Ok(cam) => scene.camera = Some(cam),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::from(EXIT_INPUT);
+            }
+        }
+    }
+    let modes = args
+        .modes
+        .iter()
+        .map(|m| match m.as_str() {
+            "uniform" => RemeshMode::Uniform,
+            "adaptive" => RemeshMode::Adaptive,
+            _ => RemeshMode::View,
+        })
+        .collect();
+    let opts = CompareOptions {
+        out_dir: args.out.unwrap_or_else(|| Path::new("out").join(format!("{stem}-compare"))),
+        frames: args.frames.map(|f| f as usize),
+        modes,
+        reference: args.reference,
+        floor: !args.no_floor,
+        width,
+        height,
+        every: args.every as usize,
+        quiet: args.quiet,
+    };
+    match compare(scene, &opts) {
+        Ok(report) => {
+            print!("{}", markdown(&report));
+            ExitCode::SUCCESS
+        }
+        Err(e) => run_failed(e),
+    }
+}
+
 /// A camera file (`cameras/*.json`): a JSON object with `keys` and no `cloths`.
 fn is_camera_file(path: &Path) -> bool {
     let Ok(text) = std::fs::read_to_string(path) else { return false };
@@ -319,6 +414,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => simulate(args),
         Command::Resume(args) => resume_run(args),
         Command::Check { files, base } => check(&files, base.as_deref()),
+        Command::Compare(args) => compare_modes(args),
         Command::Convert { conf, out, base } => convert(&conf, &out, base.as_deref()),
     }
 }

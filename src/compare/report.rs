@@ -1,0 +1,106 @@
+//! The comparison as a Markdown table and as an error-against-time plot (SVG: text needs no font
+//! files, and any browser or image viewer shows it).
+
+use std::fmt::Write;
+
+use super::{CompareReport, RunReport};
+use crate::math::Real;
+
+/// One row per run: cost, visible and geometric error, and multiples of the chaos floor.
+pub fn markdown(r: &CompareReport) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# {}: {} frames, error against `{}` ({}×{} px)\n",
+        r.scene,
+        r.frames,
+        r.reference.dir.display(),
+        r.image[0],
+        r.image[1]
+    );
+    let _ = writeln!(
+        s,
+        "| run | wall s | mean faces | normal ° | silhouette | depth | distance mean / p95 (mm) | visible part (mm) | × floor (normal, silhouette, distance) |"
+    );
+    let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---|");
+    let _ = writeln!(s, "| reference | {:.1} | {:.0} | – | – | – | – | – | – |", r.reference.wall_s, r.reference.mean_faces);
+    for run in r.floor.iter().chain(&r.modes) {
+        let Some(e) = &run.errors else { continue };
+        let multiple = match (run.name.as_str(), r.floor_multiple(e)) {
+            ("floor", _) | (_, None) => "–".to_string(),
+            (_, Some(m)) => format!("{:.1}, {:.1}, {:.1}", m[0], m[1], m[2]),
+        };
+        let _ = writeln!(
+            s,
+            "| {} | {:.1} | {:.0} | {:.2} | {:.4} | {:.4} | {:.2} / {:.2} | {:.2} / {:.2} | {} |",
+            run.name,
+            run.wall_s,
+            run.mean_faces,
+            e.visible.normal_deg,
+            e.visible.silhouette,
+            e.visible.depth,
+            1e3 * e.geometric.mean,
+            1e3 * e.geometric.p95,
+            1e3 * e.geometric_visible.mean,
+            1e3 * e.geometric_visible.p95,
+            multiple
+        );
+    }
+    s
+}
+
+/// Mean normal error (°) against wall time (s, logarithmic) for every measured run, the chaos
+/// floor as a dashed line.
+pub fn svg_plot(r: &CompareReport) -> String {
+    let (w, h, m) = (640.0, 400.0, 60.0);
+    let points: Vec<(&RunReport, Real, Real)> = r
+        .floor
+        .iter()
+        .chain(&r.modes)
+        .filter_map(|run| run.errors.as_ref().map(|e| (run, run.wall_s.max(1e-3), e.visible.normal_deg)))
+        .collect();
+    let times = points.iter().map(|p| p.1).chain([r.reference.wall_s.max(1e-3)]);
+    let (t0, t1) = times.fold((Real::INFINITY, 0.0 as Real), |(a, b), t| (a.min(t), b.max(t)));
+    let (lt0, lt1) = ((t0 / 2.0).log10(), (t1 * 2.0).log10());
+    let e1 = points.iter().map(|p| p.2).fold(0.0, Real::max).max(1e-6) * 1.2;
+    let x = |t: Real| m + (t.max(1e-3).log10() - lt0) / (lt1 - lt0) * (w - 2.0 * m);
+    let y = |e: Real| h - m - e / e1 * (h - 2.0 * m);
+    let mut s = String::new();
+    let _ = writeln!(s, r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" font-family="sans-serif" font-size="12">"#);
+    let _ = writeln!(s, r#"<rect width="{w}" height="{h}" fill="white"/>"#);
+    let _ = writeln!(
+        s,
+        r#"<path d="M{m} {m} V{} H{}" stroke="black" fill="none"/>"#,
+        h - m,
+        w - m
+    );
+    let _ = writeln!(s, r#"<text x="{}" y="{}" text-anchor="middle">wall time (s, log scale)</text>"#, w / 2.0, h - 15.0);
+    let _ = writeln!(
+        s,
+        r#"<text x="15" y="{}" transform="rotate(-90 15 {})" text-anchor="middle">mean normal error (°)</text>"#,
+        h / 2.0,
+        h / 2.0
+    );
+    let _ = writeln!(s, r#"<text x="{}" y="25" text-anchor="middle">{}: error against run time, {} frames</text>"#, w / 2.0, r.scene, r.frames);
+    for k in (lt0.ceil() as i32)..=(lt1.floor() as i32) {
+        let t = 10f64.powi(k);
+        let _ = writeln!(s, r#"<text x="{:.1}" y="{}" text-anchor="middle">{t}</text>"#, x(t), h - m + 16.0);
+    }
+    let _ = writeln!(s, r#"<text x="{}" y="{:.1}" text-anchor="end">{:.2}</text>"#, m - 5.0, y(e1) + 4.0, e1);
+    let _ = writeln!(s, r#"<text x="{}" y="{:.1}" text-anchor="end">0</text>"#, m - 5.0, y(0.0) + 4.0);
+    if let Some(f) = r.floor.as_ref().and_then(|f| f.errors.as_ref()) {
+        let yf = y(f.visible.normal_deg);
+        let _ = writeln!(s, r#"<path d="M{m} {yf:.1} H{}" stroke="gray" stroke-dasharray="6 4"/>"#, w - m);
+        let _ = writeln!(s, r#"<text x="{}" y="{:.1}" text-anchor="end" fill="gray">chaos floor</text>"#, w - m, yf - 4.0);
+    }
+    let xr = x(r.reference.wall_s);
+    let _ = writeln!(s, r#"<circle cx="{xr:.1}" cy="{:.1}" r="5" fill="black"/>"#, y(0.0));
+    let _ = writeln!(s, r#"<text x="{xr:.1}" y="{:.1}" text-anchor="middle">reference</text>"#, y(0.0) - 10.0);
+    for (run, t, e) in points.iter().filter(|p| p.0.name != "floor") {
+        let (cx, cy) = (x(*t), y(*e));
+        let _ = writeln!(s, r#"<circle cx="{cx:.1}" cy="{cy:.1}" r="5" fill="steelblue"/>"#);
+        let _ = writeln!(s, r#"<text x="{cx:.1}" y="{:.1}" text-anchor="middle">{}</text>"#, cy - 10.0, run.name);
+    }
+    s.push_str("</svg>\n");
+    s
+}

@@ -1,0 +1,135 @@
+//! `viewcloth compare` (DESIGN.md "Error against run time") on a small hanging sheet: the report
+//! has the reference, the chaos floor and every mode with finite errors; a run identical to the
+//! reference measures exactly zero error while the perturbed floor does not; the view mode,
+//! whose camera sees half the sheet, uses fewer faces than adaptive; without a camera the
+//! command is refused in one line.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::Value;
+
+fn temp_dir(name: &str) -> PathBuf {
+    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn viewcloth(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_viewcloth")).args(args).output().expect("run viewcloth")
+}
+
+/// A 1 m sheet pinned at two corners, coarse enough that the uniform reference is cheap, and a
+/// camera looking at its right half from 1.5 m.
+fn shot(dir: &Path) -> PathBuf {
+    let scene = r#"{
+  "version": 1,
+  "frame_time": 0.04,
+  "steps_per_frame": 4,
+  "frames": 12,
+  "camera": "camera.json",
+  "cloths": [{
+    "rectangle": { "width": 1.0, "height": 1.0, "resolution": [6, 6] },
+    "transform": { "translate": [-0.5, -1.0, 0.5] },
+    "material": { "preset": "cotton" },
+    "remesh": { "refine_angle": 0.3, "refine_compression": 0.01, "refine_velocity": 1.0, "size": [0.04, 0.3] },
+    "handles": [{ "nodes": [42, 48] }]
+  }],
+  "collision": { "self_collision": false }
+}"#;
+    let camera = r#"{
+  "version": 1,
+  "keys": [{ "time": 0, "position": [0.25, -1.5, 0.2], "target": [0.25, 0.0, 0.0], "fov": 25 }]
+}"#;
+    std::fs::write(dir.join("camera.json"), camera).unwrap();
+    let file = dir.join("shot.json");
+    std::fs::write(&file, scene).unwrap();
+    file
+}
+
+fn compare(args: &[&str]) -> Value {
+    let o = viewcloth(args);
+    assert!(o.status.success(), "compare {args:?}: {}", String::from_utf8_lossy(&o.stderr));
+    let out = args.iter().position(|a| *a == "--out").map(|i| PathBuf::from(args[i + 1])).unwrap();
+    assert!(std::fs::read_to_string(out.join("compare.md")).unwrap().contains("| reference |"));
+    assert!(std::fs::read_to_string(out.join("compare.svg")).unwrap().starts_with("<svg"));
+    serde_json::from_str(&std::fs::read_to_string(out.join("compare.json")).unwrap()).unwrap()
+}
+
+fn err(run: &Value, field: &str, measure: &str) -> f64 {
+    run["errors"][field][measure].as_f64().unwrap()
+}
+
+#[test]
+fn compare_reports_errors_against_time_with_a_chaos_floor() {
+    let dir = temp_dir("compare_shot");
+    let scene = shot(&dir);
+    let out = dir.join("out");
+    let r = compare(&[
+        "compare",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--size",
+        "320x180",
+        "--quiet",
+    ]);
+    assert_eq!(r["frames"], 12);
+    let modes = r["modes"].as_array().unwrap();
+    let names: Vec<&str> = modes.iter().map(|m| m["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["adaptive", "view"]);
+    let floor = &r["floor"];
+    for run in modes.iter().chain([floor]) {
+        assert!(run["wall_s"].as_f64().unwrap() > 0.0);
+        assert_eq!(run["errors"]["frames_compared"], 12);
+        for (field, m) in [("visible", "normal_deg"), ("visible", "silhouette"), ("geometric", "mean"), ("geometric", "p95")] {
+            let e = err(run, field, m);
+            assert!(e.is_finite() && e >= 0.0, "{} {field}.{m} = {e}", run["name"]);
+        }
+    }
+    // A 1 µm perturbation grows, but stays far below a centimetre on this calm shot.
+    let floor_mean = err(floor, "geometric", "mean");
+    assert!(floor_mean > 0.0 && floor_mean < 0.01, "floor distance {floor_mean}");
+    let faces = |k: usize| modes[k]["mean_faces"].as_f64().unwrap();
+    assert!(faces(1) < faces(0), "view {} vs adaptive {} faces", faces(1), faces(0));
+
+    // The reference against a deterministic re-run of itself: exactly zero.
+    let same = dir.join("same");
+    let reference = out.join("reference");
+    let r = compare(&[
+        "compare",
+        scene.to_str().unwrap(),
+        "--out",
+        same.to_str().unwrap(),
+        "--reference",
+        reference.to_str().unwrap(),
+        "--modes",
+        "uniform",
+        "--size",
+        "320x180",
+        "--quiet",
+    ]);
+    assert!(r["floor"].is_null(), "no floor with a given reference");
+    let run = &r["modes"][0];
+    for (field, m) in [("visible", "normal_deg"), ("visible", "silhouette"), ("visible", "depth"), ("geometric", "mean")] {
+        assert_eq!(err(run, field, m), 0.0, "{field}.{m}");
+    }
+}
+
+#[test]
+fn compare_without_a_camera_is_refused_in_one_line() {
+    let dir = temp_dir("compare_no_camera");
+    let scene = shot(&dir);
+    let text = std::fs::read_to_string(&scene).unwrap().replace("  \"camera\": \"camera.json\",\n", "");
+    std::fs::write(&scene, text).unwrap();
+    let out = dir.join("out");
+    let o = viewcloth(&["compare", scene.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
+    assert!(e.contains("camera"), "{e}");
+    let o = viewcloth(&["compare", scene.to_str().unwrap(), "--size", "wide", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--size"));
+}
