@@ -3,7 +3,7 @@
 //! Scene files → implicit cloth integration (Baraff & Witkin 1998) → one OBJ mesh per frame.
 //! Modules follow the pipeline: `scene` and `camera` (input), `mesh` (material and world space),
 //! `forces` (element kernels), `solver` (global implicit system), `sim` (the step and the run),
-//! `io`.
+//! `io`, and `metrics` (error against a reference run, for `compare`).
 
 pub mod camera;
 pub mod collision;
@@ -12,6 +12,7 @@ pub mod forces;
 pub mod io;
 pub mod math;
 pub mod mesh;
+pub mod metrics;
 pub mod remesh;
 pub mod scene;
 pub mod sim;
