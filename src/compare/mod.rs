@@ -144,11 +144,8 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
     };
     let ref_stats = read_stats(&reference.dir)?;
     let frames = ref_stats.frames.len().saturating_sub(1);
-    let mut floor = if opts.floor && opts.reference.is_none() {
-        Some(simulate("floor", RemeshMode::Uniform, true)?)
-    } else {
-        None
-    };
+    let mut floor =
+        if opts.floor && opts.reference.is_none() { Some(simulate("floor", RemeshMode::Uniform, true)?) } else { None };
     let mut modes = Vec::new();
     for &mode in &opts.modes {
         modes.push(simulate(mode_name(mode), mode, false)?);
@@ -156,14 +153,8 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
     for r in floor.iter_mut().chain(modes.iter_mut()) {
         r.errors = Some(errors(&reference.dir, &r.dir, &ref_stats, &camera, opts)?);
     }
-    let report = CompareReport {
-        scene: scene.name.clone(),
-        frames,
-        image: [opts.width, opts.height],
-        reference,
-        floor,
-        modes,
-    };
+    let report =
+        CompareReport { scene: scene.name.clone(), frames, image: [opts.width, opts.height], reference, floor, modes };
     write_report(&report, &opts.out_dir)?;
     Ok(report)
 }
@@ -199,15 +190,19 @@ fn run_report(name: &str, dir: PathBuf, stats: &RunStats) -> RunReport {
 /// A frame's cloth surface: positions and triangles.
 fn frame_mesh(dir: &Path, frame: usize) -> Result<(Vec<Vec3>, Vec<[usize; 3]>), RunError> {
     let path = dir.join(format!("frame_{frame:04}.obj"));
-    let obj = read_obj(&path).map_err(|e| {
-        RunError::Input(InputError { file: path.clone(), location: Some(format!("line {}", e.line)), msg: e.msg })
-    })?;
+    let obj = read_obj(&path).map_err(|msg| RunError::Input(InputError { file: path.clone(), location: None, msg }))?;
     let tris = obj.triangles.iter().map(|t| t.map(|c| c.v)).collect();
     Ok((obj.positions, tris))
 }
 
 /// Mean errors of the run in `dir` against the reference over the compared frames.
-fn errors(reference: &Path, dir: &Path, ref_stats: &RunStats, camera: &Camera, opts: &CompareOptions) -> Result<Errors, RunError> {
+fn errors(
+    reference: &Path,
+    dir: &Path,
+    ref_stats: &RunStats,
+    camera: &Camera,
+    opts: &CompareOptions,
+) -> Result<Errors, RunError> {
     let stats = read_stats(dir)?;
     let last = stats.frames.len().min(ref_stats.frames.len()).saturating_sub(1);
     let mut sum = Errors::default();
@@ -266,10 +261,8 @@ fn write_report(report: &CompareReport, dir: &Path) -> Result<(), RunError> {
         let path = dir.join(name);
         crate::io::write_atomic(&path, bytes).map_err(|source| RunError::Io { path, source })
     };
-    let json = serde_json::to_string_pretty(report).map_err(|e| RunError::Io {
-        path: dir.join("compare.json"),
-        source: std::io::Error::other(e.to_string()),
-    })?;
+    let json = serde_json::to_string_pretty(report)
+        .map_err(|e| RunError::Io { path: dir.join("compare.json"), source: std::io::Error::other(e.to_string()) })?;
     write("compare.json", json.as_bytes())?;
     write("compare.md", markdown(report).as_bytes())?;
     write("compare.svg", svg_plot(report).as_bytes())

@@ -23,7 +23,11 @@ pub fn markdown(r: &CompareReport) -> String {
         "| run | wall s | mean faces | normal ° | silhouette | depth | distance mean / p95 (mm) | visible part (mm) | × floor (normal, silhouette, distance) |"
     );
     let _ = writeln!(s, "|---|---:|---:|---:|---:|---:|---:|---:|---|");
-    let _ = writeln!(s, "| reference | {:.1} | {:.0} | – | – | – | – | – | – |", r.reference.wall_s, r.reference.mean_faces);
+    let _ = writeln!(
+        s,
+        "| reference | {:.2} | {:.0} | – | – | – | – | – | – |",
+        r.reference.wall_s, r.reference.mean_faces
+    );
     for run in r.floor.iter().chain(&r.modes) {
         let Some(e) = &run.errors else { continue };
         let multiple = match (run.name.as_str(), r.floor_multiple(e)) {
@@ -32,7 +36,7 @@ pub fn markdown(r: &CompareReport) -> String {
         };
         let _ = writeln!(
             s,
-            "| {} | {:.1} | {:.0} | {:.2} | {:.4} | {:.4} | {:.2} / {:.2} | {:.2} / {:.2} | {} |",
+            "| {} | {:.2} | {:.0} | {:.2} | {:.4} | {:.4} | {:.2} / {:.2} | {:.2} / {:.2} | {} |",
             run.name,
             run.wall_s,
             run.mean_faces,
@@ -66,22 +70,27 @@ pub fn svg_plot(r: &CompareReport) -> String {
     let x = |t: Real| m + (t.max(1e-3).log10() - lt0) / (lt1 - lt0) * (w - 2.0 * m);
     let y = |e: Real| h - m - e / e1 * (h - 2.0 * m);
     let mut s = String::new();
-    let _ = writeln!(s, r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" font-family="sans-serif" font-size="12">"#);
-    let _ = writeln!(s, r#"<rect width="{w}" height="{h}" fill="white"/>"#);
     let _ = writeln!(
         s,
-        r#"<path d="M{m} {m} V{} H{}" stroke="black" fill="none"/>"#,
-        h - m,
-        w - m
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" font-family="sans-serif" font-size="12">"#
     );
-    let _ = writeln!(s, r#"<text x="{}" y="{}" text-anchor="middle">wall time (s, log scale)</text>"#, w / 2.0, h - 15.0);
+    let _ = writeln!(s, r#"<rect width="{w}" height="{h}" fill="white"/>"#);
+    let _ = writeln!(s, r#"<path d="M{m} {m} V{} H{}" stroke="black" fill="none"/>"#, h - m, w - m);
+    let _ =
+        writeln!(s, r#"<text x="{}" y="{}" text-anchor="middle">wall time (s, log scale)</text>"#, w / 2.0, h - 15.0);
     let _ = writeln!(
         s,
         r#"<text x="15" y="{}" transform="rotate(-90 15 {})" text-anchor="middle">mean normal error (°)</text>"#,
         h / 2.0,
         h / 2.0
     );
-    let _ = writeln!(s, r#"<text x="{}" y="25" text-anchor="middle">{}: error against run time, {} frames</text>"#, w / 2.0, r.scene, r.frames);
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="25" text-anchor="middle">{}: error against run time, {} frames</text>"#,
+        w / 2.0,
+        r.scene,
+        r.frames
+    );
     for k in (lt0.ceil() as i32)..=(lt1.floor() as i32) {
         let t = 10f64.powi(k);
         let _ = writeln!(s, r#"<text x="{:.1}" y="{}" text-anchor="middle">{t}</text>"#, x(t), h - m + 16.0);
@@ -91,7 +100,8 @@ pub fn svg_plot(r: &CompareReport) -> String {
     if let Some(f) = r.floor.as_ref().and_then(|f| f.errors.as_ref()) {
         let yf = y(f.visible.normal_deg);
         let _ = writeln!(s, r#"<path d="M{m} {yf:.1} H{}" stroke="gray" stroke-dasharray="6 4"/>"#, w - m);
-        let _ = writeln!(s, r#"<text x="{}" y="{:.1}" text-anchor="end" fill="gray">chaos floor</text>"#, w - m, yf - 4.0);
+        let _ =
+            writeln!(s, r#"<text x="{}" y="{:.1}" text-anchor="end" fill="gray">chaos floor</text>"#, w - m, yf - 4.0);
     }
     let xr = x(r.reference.wall_s);
     let _ = writeln!(s, r#"<circle cx="{xr:.1}" cy="{:.1}" r="5" fill="black"/>"#, y(0.0));
