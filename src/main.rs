@@ -7,6 +7,7 @@ use clap::{Parser, Subcommand};
 
 use viewcloth::camera::Camera;
 use viewcloth::compare::{compare, markdown, CompareOptions};
+use viewcloth::render::{render_run, Colouring, RenderOptions};
 use viewcloth::scene::{self, InputError, RemeshMode, Scene};
 use viewcloth::sim::{resume, run_with_checkpoints, CheckpointOptions, ResumeOptions, RunError, RunOptions, SimError};
 
@@ -35,6 +36,9 @@ enum Command {
     /// Run a shot in several remeshing modes and report each one's error against a reference,
     /// seen from the shot camera, with its run time (compare.json, compare.md, compare.svg).
     Compare(CompareArgs),
+    /// Render PNG previews of a run's frames (RUN_DIR/view_NNNN.png) from a camera, shaded or
+    /// coloured by the cloth's view factor.
+    Render(RenderArgs),
     /// Convert an ARCSim conf into a viewcloth scene file.
     Convert {
         conf: PathBuf,
@@ -133,6 +137,30 @@ struct CompareArgs {
     /// Only the table at the end.
     #[arg(long)]
     quiet: bool,
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// Output directory of a run (its stats.json and frame_NNNN.obj; obstacle_<name>_NNNN.obj
+    /// too when the run exported them).
+    #[arg(value_name = "RUN_DIR")]
+    dir: PathBuf,
+    /// The camera to render from (a camera JSON file), at each frame's time.
+    #[arg(long, value_name = "FILE")]
+    camera: PathBuf,
+    /// Frames A..B, both included (default: every frame of the run).
+    #[arg(long, value_name = "A..B")]
+    frames: Option<String>,
+    /// Every N-th frame, counted from the first.
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
+    every: u64,
+    /// Image size, WIDTHxHEIGHT (the camera's aspect is kept).
+    #[arg(long, default_value = "960x540")]
+    size: String,
+    /// `shade`: cloth light blue, obstacles salmon; `view`: cloth by its view factor, blue (0.1)
+    /// to red (1), obstacles grey.
+    #[arg(long, default_value = "shade", value_parser = ["shade", "view"])]
+    color: String,
 }
 
 /// Exit code for bad input (scene, mesh, command line).
@@ -304,9 +332,7 @@ fn compare_modes(args: CompareArgs) -> ExitCode {
     if !set_threads(args.threads) {
         return ExitCode::from(EXIT_INPUT);
     }
-    let size = args.size.split_once('x').and_then(|(w, h)| Some((w.parse::<usize>().ok()?, h.parse::<usize>().ok()?)));
-    let Some((width, height)) = size.filter(|&(w, h)| (16..=8192).contains(&w) && (16..=8192).contains(&h)) else {
-        eprintln!("error: --size: expected WIDTHxHEIGHT with each in 16..=8192, got \"{}\"", args.size);
+    let Some((width, height)) = parse_size(&args.size) else {
         return ExitCode::from(EXIT_INPUT);
     };
     let (mut scene, stem) = match load(&Some(args.scene.clone()), None) {
@@ -351,6 +377,55 @@ fn compare_modes(args: CompareArgs) -> ExitCode {
             ExitCode::SUCCESS
         }
         Err(e) => run_failed(e),
+    }
+}
+
+/// `--size WIDTHxHEIGHT`, each in 16..=8192; None after printing the error.
+fn parse_size(text: &str) -> Option<(usize, usize)> {
+    let size = text.split_once('x').and_then(|(w, h)| Some((w.parse::<usize>().ok()?, h.parse::<usize>().ok()?)));
+    let size = size.filter(|&(w, h)| (16..=8192).contains(&w) && (16..=8192).contains(&h));
+    if size.is_none() {
+        eprintln!("error: --size: expected WIDTHxHEIGHT with each in 16..=8192, got \"{text}\"");
+    }
+    size
+}
+
+/// `--frames A..B` (both included, A ≤ B); None after printing the error.
+fn parse_frames(text: &str) -> Option<(usize, usize)> {
+    let range = text.split_once("..").and_then(|(a, b)| Some((a.parse::<usize>().ok()?, b.parse::<usize>().ok()?)));
+    let range = range.filter(|(a, b)| a <= b);
+    if range.is_none() {
+        eprintln!("error: --frames: expected A..B, frame numbers with A ≤ B (both included), got \"{text}\"");
+    }
+    range
+}
+
+fn render(args: RenderArgs) -> ExitCode {
+    let Some((width, height)) = parse_size(&args.size) else {
+        return ExitCode::from(EXIT_INPUT);
+    };
+    let frames = match args.frames.as_deref().map(parse_frames) {
+        Some(None) => return ExitCode::from(EXIT_INPUT),
+        range => range.flatten(),
+    };
+    let camera = match Camera::load(&args.camera) {
+        Ok(camera) => camera,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_INPUT);
+        }
+    };
+    let colouring = if args.color == "view" { Colouring::View } else { Colouring::Shade };
+    let opts = RenderOptions { width, height, frames, every: args.every as usize, colouring };
+    match render_run(&args.dir, &camera, &opts) {
+        Ok(n) => {
+            println!("{n} images → {}", args.dir.join("view_*.png").display());
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(if e.is_input() { EXIT_INPUT } else { EXIT_RUN })
+        }
     }
 }
 
@@ -415,6 +490,7 @@ fn main() -> ExitCode {
         Command::Resume(args) => resume_run(args),
         Command::Check { files, base } => check(&files, base.as_deref()),
         Command::Compare(args) => compare_modes(args),
+        Command::Render(args) => render(args),
         Command::Convert { conf, out, base } => convert(&conf, &out, base.as_deref()),
     }
 }
