@@ -25,7 +25,7 @@ use crate::io::write_atomic;
 use crate::math::{Real, Vec3};
 use crate::metrics::rasterize;
 use crate::scene::InputError;
-use crate::sizing::view::{mu_frustum, mu_orientation, ViewParams};
+use crate::sizing::view::{triangle_view_factor, ViewParams};
 
 pub use run_dir::{read_stats, select_frames, FrameMeshes, RunFiles};
 
@@ -147,10 +147,7 @@ fn face_colours(meshes: &FrameMeshes, view: &View, colouring: Colouring) -> Vec<
 /// outside the frustum by the centroid's signed distance to it. As `sizing::view::face_views`
 /// at one camera time.
 pub fn view_factor(x: [Vec3; 3], view: &View, params: &ViewParams) -> Real {
-    let centroid = (x[0] + x[1] + x[2]) / 3.0;
-    let normal = (x[1] - x[0]).cross(&(x[2] - x[0])).try_normalize(0.0).unwrap_or_else(Vec3::zeros);
-    let cos = normal.dot(&(view.eye - centroid).try_normalize(0.0).unwrap_or_else(Vec3::zeros));
-    mu_frustum(mu_orientation(cos, params), view.frustum_distance(&centroid), params)
+    triangle_view_factor(&x, view, params)
 }
 
 /// Blue at μ = 0.1 to red at μ = 1, linearly.
@@ -171,16 +168,7 @@ mod tests {
 
     /// Eye at the origin looking along +y, z up, 90° vertical fov, square image.
     fn view() -> View {
-        View {
-            eye: Vec3::zeros(),
-            forward: Vec3::y(),
-            up: Vec3::z(),
-            right: Vec3::x(),
-            tan_half_fov: 1.0,
-            aspect: 1.0,
-            near: 0.1,
-            far: 100.0,
-        }
+        crate::metrics::raster::tests::view(1.0)
     }
 
     /// A triangle at depth `y` facing the eye, its centroid on the view axis.

@@ -16,7 +16,7 @@
 
 use rayon::prelude::*;
 
-use crate::camera::Camera;
+use crate::camera::{Camera, View};
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
 
@@ -93,6 +93,15 @@ pub fn mu_frustum(mu1: Real, d: Real, p: &ViewParams) -> Real {
     (1.0 - delta) * mu1 + delta * p.mu_out
 }
 
+/// μ₂ of a triangle `x` seen by `view` (eqs. 1–4): orientation from its normal and the
+/// direction to the eye, blended towards μ_out outside the frustum by its centroid's distance.
+pub fn triangle_view_factor(x: &[Vec3; 3], view: &View, p: &ViewParams) -> Real {
+    let centroid = (x[0] + x[1] + x[2]) / 3.0;
+    let normal = (x[1] - x[0]).cross(&(x[2] - x[0])).try_normalize(0.0).unwrap_or_else(Vec3::zeros);
+    let cos = normal.dot(&(view.eye - centroid).try_normalize(0.0).unwrap_or_else(Vec3::zeros));
+    mu_frustum(mu_orientation(cos, p), view.frustum_distance(&centroid), p)
+}
+
 /// Camera time offsets (s) and weights of the lookahead window, eqs. 6–9: the current time and
 /// `hold` ahead at weight 1, then `window` more each way with weights 1 − i/m, sampled every
 /// `dt` seconds (the remeshing interval).
@@ -136,14 +145,8 @@ pub fn face_views(
             let (p, size_min) = params.get(material).copied().flatten()?;
             let x = mesh.face_nodes(f).map(|n| mesh.nodes[n].x);
             let centroid: Vec3 = (x[0] + x[1] + x[2]) / 3.0;
-            let normal = (x[1] - x[0]).cross(&(x[2] - x[0])).try_normalize(0.0).unwrap_or_else(Vec3::zeros);
-            let mu = samples[material]
-                .iter()
-                .map(|(view, w)| {
-                    let cos = normal.dot(&(view.eye - centroid).try_normalize(0.0).unwrap_or_else(Vec3::zeros));
-                    w * mu_frustum(mu_orientation(cos, &p), view.frustum_distance(&centroid), &p)
-                })
-                .fold(0.0, Real::max);
+            let mu =
+                samples[material].iter().map(|(view, w)| w * triangle_view_factor(&x, view, &p)).fold(0.0, Real::max);
             Some(FaceView { mu, size_min: size_min.max(p.k_dist * now.eye_distance(&centroid)) })
         })
         .collect()
