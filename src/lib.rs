@@ -5,6 +5,7 @@
 //! `forces` (element kernels), `solver` (global implicit system), `sim` (the step and the run),
 //! `io`, `metrics` (error against a reference run, for `compare`) and `render` (PNG previews).
 
+pub mod batch;
 pub mod camera;
 pub mod collision;
 pub mod compare;

@@ -39,6 +39,23 @@ enum Command {
     /// Render PNG previews of a run's frames (RUN_DIR/view_NNNN.png) from a camera, shaded or
     /// coloured by the cloth's view factor.
     Render(RenderArgs),
+    /// Run many shots from a shots file (JSON list of scenes with per-shot options), several at a
+    /// time; a failed shot does not stop the others.
+    Batch {
+        shots: PathBuf,
+        /// Shots run at once (each gets an equal share of the cores).
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=256))]
+        jobs: u64,
+        /// Worker threads per shot (default: the cores divided by --jobs).
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
+        threads: Option<u64>,
+        /// The summary JSON (default: out/<shots file stem>.batch.json).
+        #[arg(long)]
+        summary: Option<PathBuf>,
+        /// No line per finished shot.
+        #[arg(long)]
+        quiet: bool,
+    },
     /// Convert an ARCSim conf into a viewcloth scene file.
     Convert {
         conf: PathBuf,
@@ -429,6 +446,55 @@ fn render(args: RenderArgs) -> ExitCode {
     }
 }
 
+fn batch(file: &Path, jobs: u64, threads: Option<u64>, summary: Option<PathBuf>, quiet: bool) -> ExitCode {
+    let shots = match viewcloth::batch::load(file) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(EXIT_INPUT);
+        }
+    };
+    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
+    let threads = threads.map(|t| t as usize).unwrap_or((cores / jobs as usize).max(1));
+    let summary = summary.unwrap_or_else(|| {
+        let stem = file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "shots".into());
+        Path::new("out").join(format!("{stem}.batch.json"))
+    });
+    let n = shots.len();
+    let report = |r: &viewcloth::batch::ShotResult| {
+        if quiet {
+            return;
+        }
+        match &r.error {
+            None => {
+                println!("ok: {}: {} frames in {:.1} s → {}", r.scene.display(), r.frames, r.wall_s, r.out.display())
+            }
+            Some(e) => println!("failed: {}: {e}", r.scene.display()),
+        }
+    };
+    let results = viewcloth::batch::run_shots(shots, jobs as usize, threads, &report);
+    let failed = results.iter().filter(|r| !r.ok).count();
+    let json = serde_json::to_string_pretty(&serde_json::json!({ "shots": results, "failed": failed }));
+    let written = json.map_err(|e| e.to_string()).and_then(|j| {
+        if let Some(dir) = summary.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
+        }
+        viewcloth::io::write_atomic(&summary, j.as_bytes()).map_err(|e| e.to_string())
+    });
+    if let Err(e) = written {
+        eprintln!("error: {}: {e}", summary.display());
+        return ExitCode::from(EXIT_RUN);
+    }
+    if !quiet {
+        println!("{} of {n} shots ok; summary → {}", n - failed, summary.display());
+    }
+    if failed == 0 {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::from(EXIT_RUN)
+    }
+}
+
 /// A camera file (`cameras/*.json`): a JSON object with `keys` and no `cloths`.
 fn is_camera_file(path: &Path) -> bool {
     let Ok(text) = std::fs::read_to_string(path) else { return false };
@@ -491,6 +557,7 @@ fn main() -> ExitCode {
         Command::Check { files, base } => check(&files, base.as_deref()),
         Command::Compare(args) => compare_modes(args),
         Command::Render(args) => render(args),
+        Command::Batch { shots, jobs, threads, summary, quiet } => batch(&shots, jobs, threads, summary, quiet),
         Command::Convert { conf, out, base } => convert(&conf, &out, base.as_deref()),
     }
 }

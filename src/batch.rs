@@ -1,0 +1,185 @@
+//! `viewcloth batch SHOTS.json`: many shots from one list, `jobs` at a time.
+//!
+//! Every shot's scene and camera are loaded and checked before the first simulation starts, so
+//! a typo in shot 40 does not surface after 39 shots have run. Shots then run on `jobs` worker
+//! threads, each with its own share of the cores (a run's result does not depend on its thread
+//! count, so a shot's frames are the same as from `simulate`). A shot that fails is reported and
+//! the others go on; the summary (`batch.json` in `out`) says which.
+//!
+//! Format (paths relative to the shots file):
+//! ```json
+//! { "version": 1,
+//!   "shots": [ { "scene": "scenes/a.json", "frames": 40, "out": "out/a", "mode": "view",
+//!                "camera": "cameras/pan.json", "checkpoint_every": 10 } ] }
+//! ```
+//! Only `scene` is required; `out` defaults to `out/<scene stem>` beside the shots file, and two
+//! shots may not share an output directory.
+
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+use serde::{Deserialize, Serialize};
+
+use crate::camera::Camera;
+use crate::scene::{self, InputError, RemeshMode, Scene};
+use crate::sim::{run_with_checkpoints, CheckpointOptions, RunOptions};
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct BatchSpec {
+    version: u32,
+    shots: Vec<ShotSpec>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ShotSpec {
+    scene: String,
+    #[serde(default)]
+    frames: Option<u64>,
+    #[serde(default)]
+    out: Option<String>,
+    #[serde(default)]
+    mode: Option<String>,
+    #[serde(default)]
+    camera: Option<String>,
+    #[serde(default)]
+    checkpoint_every: Option<u64>,
+}
+
+/// One validated shot, ready to run.
+pub struct Shot {
+    pub scene_file: PathBuf,
+    pub scene: Scene,
+    pub out: PathBuf,
+    pub frames: Option<usize>,
+    mode: Option<RemeshMode>,
+    camera_file: Option<PathBuf>,
+    checkpoint_every: Option<usize>,
+}
+
+/// How one shot ended.
+#[derive(Clone, Debug, Serialize)]
+pub struct ShotResult {
+    pub scene: PathBuf,
+    pub out: PathBuf,
+    pub ok: bool,
+    /// Frames written after frame 0.
+    pub frames: usize,
+    pub wall_s: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+}
+
+fn err(file: &Path, location: String, msg: impl Into<String>) -> InputError {
+    InputError { file: file.to_path_buf(), location: Some(location), msg: msg.into() }
+}
+
+/// Reads the shots file and loads and checks every shot's scene and camera.
+pub fn load(path: &Path) -> Result<Vec<Shot>, InputError> {
+    let text = std::fs::read_to_string(path).map_err(|e| InputError {
+        file: path.to_path_buf(),
+        location: None,
+        msg: format!("cannot read shots file: {e}"),
+    })?;
+    let spec: BatchSpec = crate::io::json::parse(&text).map_err(|(loc, msg)| err(path, loc, msg))?;
+    if spec.version != 1 {
+        return Err(err(path, "version".into(), format!("expected 1, got {}", spec.version)));
+    }
+    if spec.shots.is_empty() {
+        return Err(err(path, "shots".into(), "expected at least one shot"));
+    }
+    let base = path.parent().unwrap_or(Path::new("."));
+    let mut shots: Vec<Shot> = Vec::new();
+    for (i, s) in spec.shots.into_iter().enumerate() {
+        let at = |field: &str| format!("shots[{i}].{field}");
+        let scene_file = base.join(&s.scene);
+        let mut scene =
+            scene::load_file(&scene_file).map_err(|e| err(path, at("scene"), format!("{}: {e}", s.scene)))?;
+        let camera_file = s.camera.as_ref().map(|c| base.join(c));
+        if let Some(file) = &camera_file {
+            scene.camera = Some(Camera::load(file).map_err(|e| err(path, at("camera"), e.to_string()))?);
+        }
+        let mode = match s.mode.as_deref() {
+            None => camera_file.as_ref().map(|_| RemeshMode::View),
+            Some("uniform") => Some(RemeshMode::Uniform),
+            Some("adaptive") => Some(RemeshMode::Adaptive),
+            Some("view") => Some(RemeshMode::View),
+            Some(other) => {
+                return Err(err(
+                    path,
+                    at("mode"),
+                    format!("expected \"uniform\", \"adaptive\" or \"view\", got \"{other}\""),
+                ))
+            }
+        };
+        if let Some(m) = mode {
+            if scene.set_remesh_mode(m) == 0 {
+                return Err(err(path, at("mode"), "the scene has no cloth with a remesh block"));
+            }
+            if m == RemeshMode::View && scene.camera.is_none() {
+                return Err(err(path, at("mode"), "\"view\" needs a camera (the shot's or the scene's)"));
+            }
+        }
+        let positive = |v: Option<u64>, field: &str| match v {
+            Some(0) => Err(err(path, at(field), "expected an integer ≥ 1, got 0")),
+            v => Ok(v.map(|n| n as usize)),
+        };
+        let frames = positive(s.frames, "frames")?;
+        let checkpoint_every = positive(s.checkpoint_every, "checkpoint_every")?;
+        let stem = scene_file.file_stem().map(|x| x.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
+        let out = base.join(s.out.unwrap_or_else(|| format!("out/{stem}")));
+        if let Some(j) = shots.iter().position(|o| o.out == out) {
+            return Err(err(path, at("out"), format!("{} is also shot {j}'s output directory", out.display())));
+        }
+        shots.push(Shot { scene_file, scene, out, frames, mode, camera_file, checkpoint_every });
+    }
+    Ok(shots)
+}
+
+/// Runs the shots, `jobs` at a time, each with `threads` worker threads; `report` is called as
+/// each shot finishes. Results come back in the shots' order.
+pub fn run_shots(
+    shots: Vec<Shot>,
+    jobs: usize,
+    threads: usize,
+    report: &(dyn Fn(&ShotResult) + Sync),
+) -> Vec<ShotResult> {
+    let n = shots.len();
+    let queue: Mutex<Vec<(usize, Shot)>> = Mutex::new(shots.into_iter().enumerate().rev().collect());
+    let results: Mutex<Vec<Option<ShotResult>>> = Mutex::new(vec![None; n]);
+    std::thread::scope(|s| {
+        for _ in 0..jobs.clamp(1, n.max(1)) {
+            s.spawn(|| loop {
+                let Some((i, shot)) = queue.lock().map(|mut q| q.pop()).unwrap_or(None) else { break };
+                let result = run_one(shot, threads);
+                report(&result);
+                if let Ok(mut r) = results.lock() {
+                    r[i] = Some(result);
+                }
+            });
+        }
+    });
+    results.into_inner().unwrap_or_default().into_iter().flatten().collect()
+}
+
+fn run_one(shot: Shot, threads: usize) -> ShotResult {
+    let Shot { scene_file, scene, out, frames, mode, camera_file, checkpoint_every } = shot;
+    let clock = std::time::Instant::now();
+    let opts = RunOptions { out_dir: out.clone(), frames, quiet: true, export_obstacles: false };
+    let ck = checkpoint_every.map(|every| CheckpointOptions {
+        every,
+        scene_file: std::path::absolute(&scene_file).ok(),
+        mode,
+        camera_file: camera_file.as_ref().and_then(|c| std::path::absolute(c).ok()),
+    });
+    let outcome =
+        rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).build().map_err(|e| e.to_string()).and_then(
+            |pool| pool.install(|| run_with_checkpoints(scene, &opts, ck.as_ref())).map_err(|e| e.to_string()),
+        );
+    let (ok, frames, error) = match outcome {
+        Ok(stats) => (true, stats.frames.len().saturating_sub(1), None),
+        Err(e) => (false, 0, Some(e)),
+    };
+    ShotResult { scene: scene_file, out, ok, frames, wall_s: clock.elapsed().as_secs_f64(), error }
+}
