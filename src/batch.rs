@@ -148,14 +148,19 @@ pub fn run_shots(
     let n = shots.len();
     let queue: Mutex<Vec<(usize, Shot)>> = Mutex::new(shots.into_iter().enumerate().rev().collect());
     let results: Mutex<Vec<Option<ShotResult>>> = Mutex::new(vec![None; n]);
+    let (queue, results_ref) = (&queue, &results);
     std::thread::scope(|s| {
         for _ in 0..jobs.clamp(1, n.max(1)) {
-            s.spawn(|| loop {
-                let Some((i, shot)) = queue.lock().map(|mut q| q.pop()).unwrap_or(None) else { break };
-                let result = run_one(shot, threads);
-                report(&result);
-                if let Ok(mut r) = results.lock() {
-                    r[i] = Some(result);
+            // The queue's lock is taken and released in `pop`: held across a shot, it would
+            // serialise the workers.
+            let pop = || queue.lock().map(|mut q| q.pop()).unwrap_or(None);
+            s.spawn(move || {
+                while let Some((i, shot)) = pop() {
+                    let result = run_one(shot, threads);
+                    report(&result);
+                    if let Ok(mut r) = results_ref.lock() {
+                        r[i] = Some(result);
+                    }
                 }
             });
         }
