@@ -24,6 +24,7 @@ use crate::io::stats::RunStats;
 use crate::math::{Real, Vec3};
 use crate::metrics::{rasterize, surface_distance, visible_error, visible_triangles, Surface};
 use crate::metrics::{SurfaceDistance, VisibleError};
+use crate::render::run_dir::{self, RunFiles};
 use crate::scene::{InputError, RemeshMode, Scene};
 use crate::sim::{run, RunError, RunOptions};
 
@@ -175,11 +176,7 @@ fn perturb_positions(scene: &mut Scene) {
 }
 
 fn read_stats(dir: &Path) -> Result<RunStats, RunError> {
-    let path = dir.join("stats.json");
-    let text = std::fs::read_to_string(&path).map_err(|source| RunError::Io { path: path.clone(), source })?;
-    serde_json::from_str(&text).map_err(|e| {
-        RunError::Input(InputError { file: path, location: None, msg: format!("not a viewcloth stats.json: {e}") })
-    })
+    run_dir::read_stats(dir).map_err(RunError::Input)
 }
 
 fn run_report(name: &str, dir: PathBuf, stats: &RunStats) -> RunReport {
@@ -187,9 +184,9 @@ fn run_report(name: &str, dir: PathBuf, stats: &RunStats) -> RunReport {
     RunReport { name: name.into(), dir, wall_s: stats.total_wall_s, mean_faces: faces, errors: None }
 }
 
-/// A frame's cloth surface: positions and triangles.
-fn frame_mesh(dir: &Path, frame: usize) -> Result<(Vec<Vec3>, Vec<[usize; 3]>), RunError> {
-    let path = dir.join(format!("frame_{frame:04}.obj"));
+/// A frame's cloth surface: positions and triangles (file names as the run numbers them).
+fn frame_mesh(files: &RunFiles, frame: usize) -> Result<(Vec<Vec3>, Vec<[usize; 3]>), RunError> {
+    let path = files.frame_path(frame);
     let obj = read_obj(&path).map_err(|msg| RunError::Input(InputError { file: path.clone(), location: None, msg }))?;
     let tris = obj.triangles.iter().map(|t| t.map(|c| c.v)).collect();
     Ok((obj.positions, tris))
@@ -205,11 +202,13 @@ fn errors(
 ) -> Result<Errors, RunError> {
     let stats = read_stats(dir)?;
     let last = stats.frames.len().min(ref_stats.frames.len()).saturating_sub(1);
+    let ref_files = RunFiles::scan(reference, 1, last).map_err(RunError::Input)?;
+    let files = RunFiles::scan(dir, 1, last).map_err(RunError::Input)?;
     let mut sum = Errors::default();
     let mut n = 0;
     for f in (opts.every.max(1)..=last).step_by(opts.every.max(1)) {
-        let (xr, tr) = frame_mesh(reference, f)?;
-        let (xc, tc) = frame_mesh(dir, f)?;
+        let (xr, tr) = frame_mesh(&ref_files, f)?;
+        let (xc, tc) = frame_mesh(&files, f)?;
         let view = camera.view_at(ref_stats.frames[f].time);
         let ir = rasterize(&xr, &tr, &view, opts.width, opts.height);
         let ic = rasterize(&xc, &tc, &view, opts.width, opts.height);

@@ -14,7 +14,7 @@
 //! aliased; the images are previews. Output is deterministic (the rasteriser is).
 
 pub mod png;
-mod run_dir;
+pub mod run_dir;
 
 use std::path::{Path, PathBuf};
 

@@ -1,5 +1,6 @@
-//! Reading a run's output directory for `render`: the frames and times listed in `stats.json`,
-//! the frame meshes `frame_NNNN.obj` and the exported obstacles `obstacle_<name>_NNNN.obj`.
+//! Reading a run's output directory (for `render` and `compare`): the frames and times listed
+//! in `stats.json`, the frame meshes `frame_NNNN.obj` and the exported obstacles
+//! `obstacle_<name>_NNNN.obj`.
 //!
 //! A run numbers its files with at least four digits, more when its frame count needs them
 //! (`sim::run`); the width is found from the files themselves.
