@@ -1,22 +1,13 @@
 //! `viewcloth batch`: shots from one list run two at a time give the same frames as `simulate`
 //! (bit for bit); the summary lists every shot; a bad shot is refused before anything runs.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::path::Path;
+
+mod cli;
+use cli::{temp_dir, viewcloth};
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn viewcloth(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_viewcloth")).args(args).output().expect("run viewcloth")
 }
 
 #[test]

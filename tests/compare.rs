@@ -5,20 +5,11 @@
 //! command is refused in one line.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+
+mod cli;
+use cli::{temp_dir, viewcloth};
 
 use serde_json::Value;
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn viewcloth(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_viewcloth")).args(args).output().expect("run viewcloth")
-}
 
 /// A 1 m sheet pinned at two corners, coarse enough that the uniform reference is cheap, and a
 /// camera looking at its right half from 1.5 m.
