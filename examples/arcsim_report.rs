@@ -12,17 +12,32 @@ use std::path::Path;
 use viewcloth::collision::sdf::MeshSdf;
 use viewcloth::io::obj::read_obj;
 
-fn main() {
+fn main() -> std::process::ExitCode {
     let args: Vec<String> = std::env::args().collect();
     if args.len() < 3 {
-        eprintln!("usage: arcsim_report <run dir> <frame,frame,…>");
-        std::process::exit(2);
+        eprintln!("usage: arcsim_report <run dir> <frame,frame,…> [span,span,…]");
+        return std::process::ExitCode::from(2);
     }
+    match report(&args) {
+        Ok(json) => {
+            println!("{json}");
+            std::process::ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::ExitCode::from(2)
+        }
+    }
+}
+
+/// The report of the run in `args[1]` as one JSON object, or a one-line error.
+fn report(args: &[String]) -> Result<String, String> {
     let dir = Path::new(&args[1]);
     let marks: Vec<usize> = args[2].split(',').filter_map(|s| s.parse().ok()).collect();
-    let stats: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("stats.json")).expect("stats.json")).expect("JSON");
-    let frames = stats["frames"].as_array().expect("frames");
+    let stats_path = dir.join("stats.json");
+    let text = std::fs::read_to_string(&stats_path).map_err(|e| format!("{}: {e}", stats_path.display()))?;
+    let stats: serde_json::Value = serde_json::from_str(&text).map_err(|e| format!("{}: {e}", stats_path.display()))?;
+    let frames = stats["frames"].as_array().ok_or_else(|| format!("{}: no \"frames\" array", stats_path.display()))?;
     let wall: Vec<f64> = frames.iter().skip(1).filter_map(|f| f["wall_s"].as_f64()).collect();
     let spans: Vec<String> = args
         .get(3)
@@ -48,8 +63,8 @@ fn main() {
     let (mean, median) = mean_median(&wall);
 
     // Clearance per frame: obstacle files are obstacle_<name>_<frame>.obj beside frame_<frame>.obj.
-    let mut names: Vec<String> = std::fs::read_dir(dir)
-        .expect("run dir")
+    let list = |dir: &Path| std::fs::read_dir(dir).map_err(|e| format!("{}: {e}", dir.display()));
+    let mut names: Vec<String> = list(dir)?
         .filter_map(|e| e.ok()?.file_name().into_string().ok())
         .filter(|n| n.starts_with("frame_") && n.ends_with(".obj"))
         .collect();
@@ -59,15 +74,16 @@ fn main() {
     let mut have_obstacles = false;
     for name in &names {
         let digits = &name["frame_".len()..name.len() - 4];
-        let cloth = read_obj(&dir.join(name)).expect("frame OBJ");
+        let read = |name: &str| read_obj(&dir.join(name)).map_err(|e| format!("{}: {e}", dir.join(name).display()));
+        let cloth = read(name)?;
         let suffix = format!("_{digits}.obj");
-        for entry in std::fs::read_dir(dir).expect("run dir") {
-            let obs = entry.expect("entry").file_name().into_string().unwrap_or_default();
+        for entry in list(dir)?.flatten() {
+            let obs = entry.file_name().into_string().unwrap_or_default();
             if !(obs.starts_with("obstacle_") && obs.ends_with(&suffix)) {
                 continue;
             }
             have_obstacles = true;
-            let d = read_obj(&dir.join(&obs)).expect("obstacle OBJ");
+            let d = read(&obs)?;
             let tris: Vec<[usize; 3]> = d.triangles.iter().map(|t| t.map(|c| c.v)).collect();
             let sdf = MeshSdf::new(&tris, &d.positions);
             let m =
@@ -82,7 +98,7 @@ fn main() {
         marks.iter().filter(|&&f| f < faces.len()).map(|&f| format!("\"{f}\": {}", faces[f])).collect();
     let stage_json: Vec<String> = stages.iter().map(|(k, v)| format!("\"{k}\": {v:.3}")).collect();
     let clearance = if have_obstacles { format!("{min_clearance:.6}") } else { "null".to_string() };
-    println!(
+    Ok(format!(
         "{{\"frames\": {}, \"mean_s\": {mean:.4}, \"median_s\": {median:.4}, \"faces_at\": {{{}}}, \"max_faces\": {}, \
          \"min_clearance_m\": {clearance}, \"min_clearance_frame\": {worst_frame}, \"penetrations\": {penetrations}, \
          \"total_s\": {:.2}, \"spans\": {{{}}}, \"stage_s\": {{{}}}, \"error\": {}}}",
@@ -93,7 +109,7 @@ fn main() {
         spans.join(", "),
         stage_json.join(", "),
         stats.get("error").map(|e| e.to_string()).unwrap_or_else(|| "null".into()),
-    );
+    ))
 }
 
 /// Mean and median of per-frame wall times.

@@ -25,7 +25,7 @@ fn simulate(scene_path: &Path, camera: &Camera, mode: RemeshMode, frames: usize)
 
 /// Mean material-space face area inside the frustum and beyond its margin at the last frame.
 fn areas_in_and_out(dir: &Path, s: &RunStats, camera: &Camera) -> (f64, f64) {
-    let last = s.frames.last().expect("frames");
+    let Some(last) = s.frames.last() else { return (f64::NAN, f64::NAN) };
     let obj = read_obj(&dir.join(format!("frame_{:04}.obj", last.frame))).unwrap_or_else(|e| panic!("{e:?}"));
     let view = camera.view_at(last.time);
     let (mut inside, mut outside) = (Vec::new(), Vec::new());
