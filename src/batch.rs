@@ -102,22 +102,15 @@ pub fn load(path: &Path) -> Result<Vec<Shot>, InputError> {
         }
         let mode = match s.mode.as_deref() {
             None => camera_file.as_ref().map(|_| RemeshMode::View),
-            Some("uniform") => Some(RemeshMode::Uniform),
-            Some("adaptive") => Some(RemeshMode::Adaptive),
-            Some("view") => Some(RemeshMode::View),
-            Some(other) => {
-                return Err(err(
-                    path,
-                    at("mode"),
-                    format!("expected \"uniform\", \"adaptive\" or \"view\", got \"{other}\""),
-                ))
-            }
+            Some(name) => Some(RemeshMode::parse(name).ok_or_else(|| {
+                err(path, at("mode"), format!("expected \"uniform\", \"adaptive\" or \"view\", got \"{name}\""))
+            })?),
         };
         if let Some(m) = mode {
             if scene.set_remesh_mode(m) == 0 {
                 return Err(err(path, at("mode"), "the scene has no cloth with a remesh block"));
             }
-            if m == RemeshMode::View && scene.camera.is_none() {
+            if scene.view_cloth_without_camera().is_some() {
                 return Err(err(path, at("mode"), "\"view\" needs a camera (the shot's or the scene's)"));
             }
         }

@@ -90,7 +90,7 @@ struct SimulateArgs {
     /// Override the remeshing mode of every cloth with a `remesh` block: `adaptive`, `uniform`
     /// (refined once to the minimum edge length, never remeshed) or `view` (adaptive, scaled by
     /// the camera's view factors; needs a camera).
-    #[arg(long, value_parser = ["uniform", "adaptive", "view"])]
+    #[arg(long, value_parser = RemeshMode::NAMES)]
     mode: Option<String>,
     /// The shot camera (a camera JSON file) for view-dependent remeshing; implies `--mode view`
     /// unless `--mode` is given.
@@ -133,7 +133,7 @@ struct CompareArgs {
     #[arg(long)]
     out: Option<PathBuf>,
     /// Modes compared with the reference, comma-separated.
-    #[arg(long, default_value = "adaptive,view", value_delimiter = ',', value_parser = ["uniform", "adaptive", "view"])]
+    #[arg(long, default_value = "adaptive,view", value_delimiter = ',', value_parser = RemeshMode::NAMES)]
     modes: Vec<String>,
     /// An existing run directory to use as the reference (default: a uniform run at the
     /// adaptive minimum edge length, simulated here). No chaos floor is run then.
@@ -268,16 +268,12 @@ fn simulate(args: SimulateArgs) -> ExitCode {
             }
         }
     }
+    // clap admits only RemeshMode::NAMES; a view mode without a camera is refused by
+    // Simulation::new before anything is written.
     let mode = match mode.as_deref() {
-        Some("uniform") => Some(RemeshMode::Uniform),
-        Some("adaptive") => Some(RemeshMode::Adaptive),
-        Some(_) => Some(RemeshMode::View),
+        Some(name) => RemeshMode::parse(name),
         None => camera_file.as_ref().map(|_| RemeshMode::View),
     };
-    if mode == Some(RemeshMode::View) && scene.camera.is_none() {
-        eprintln!("error: --mode view: scene '{}' has no camera; pass --camera FILE", scene.name);
-        return ExitCode::from(EXIT_INPUT);
-    }
     if let Some(mode) = mode {
         if scene.set_remesh_mode(mode) == 0 {
             eprintln!("error: --mode: scene '{}' has no cloth with a remesh block", scene.name);
@@ -368,15 +364,7 @@ fn compare_modes(args: CompareArgs) -> ExitCode {
             }
         }
     }
-    let modes = args
-        .modes
-        .iter()
-        .map(|m| match m.as_str() {
-            "uniform" => RemeshMode::Uniform,
-            "adaptive" => RemeshMode::Adaptive,
-            _ => RemeshMode::View,
-        })
-        .collect();
+    let modes = args.modes.iter().filter_map(|m| RemeshMode::parse(m)).collect();
     let opts = CompareOptions {
         out_dir: args.out.unwrap_or_else(|| Path::new("out").join(format!("{stem}-compare"))),
         frames: args.frames.map(|f| f as usize),

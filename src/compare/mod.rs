@@ -100,14 +100,6 @@ impl CompareReport {
     }
 }
 
-fn mode_name(mode: RemeshMode) -> &'static str {
-    match mode {
-        RemeshMode::Uniform => "uniform",
-        RemeshMode::Adaptive => "adaptive",
-        RemeshMode::View => "view",
-    }
-}
-
 /// Runs the shot in every mode (and the reference and floor unless given or off), measures the
 /// errors and writes `compare.json`, `compare.md` and `compare.svg` into `opts.out_dir`.
 pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, RunError> {
@@ -149,7 +141,7 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
         if opts.floor && opts.reference.is_none() { Some(simulate("floor", RemeshMode::Uniform, true)?) } else { None };
     let mut modes = Vec::new();
     for &mode in &opts.modes {
-        modes.push(simulate(mode_name(mode), mode, false)?);
+        modes.push(simulate(mode.name(), mode, false)?);
     }
     for r in floor.iter_mut().chain(modes.iter_mut()) {
         r.errors = Some(errors(&reference.dir, &r.dir, &ref_stats, &camera, opts)?);

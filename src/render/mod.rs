@@ -136,18 +136,10 @@ fn face_colours(meshes: &FrameMeshes, view: &View, colouring: Colouring) -> Vec<
             (Colouring::Shade, false) => OBSTACLE,
             (Colouring::View, false) => OBSTACLE_GREY,
             (Colouring::View, true) => {
-                view_ramp(view_factor(meshes.triangles[f].map(|i| meshes.positions[i]), view, &params))
+                view_ramp(triangle_view_factor(&meshes.triangles[f].map(|i| meshes.positions[i]), view, &params))
             }
         })
         .collect()
-}
-
-/// View factor μ₂ of the triangle `x` seen by `view` (Koh et al. 2014, eqs. 1–4): orientation
-/// from the cosine between its normal and the direction to the eye, blended towards μ_out
-/// outside the frustum by the centroid's signed distance to it. As `sizing::view::face_views`
-/// at one camera time.
-pub fn view_factor(x: [Vec3; 3], view: &View, params: &ViewParams) -> Real {
-    triangle_view_factor(&x, view, params)
 }
 
 /// Blue at μ = 0.1 to red at μ = 1, linearly.
@@ -199,12 +191,12 @@ mod tests {
     #[test]
     fn facing_cloth_in_frame_has_view_factor_one_and_out_of_frame_mu_out() {
         let p = ViewParams::default();
-        assert!((view_factor(facing(2.0, 0.5), &view(), &p) - 1.0).abs() < 1e-12);
+        assert!((triangle_view_factor(&facing(2.0, 0.5), &view(), &p) - 1.0).abs() < 1e-12);
         // Edge-on (normal ⟂ the direction to the eye): μ_back + k_cos (1 − μ_back).
         let edge_on = [Vec3::new(0.0, 2.0, -0.5), Vec3::new(0.0, 3.0, -0.5), Vec3::new(0.0, 2.5, 0.5)];
-        assert!((view_factor(edge_on, &view(), &p) - 0.28).abs() < 1e-12);
+        assert!((triangle_view_factor(&edge_on, &view(), &p) - 0.28).abs() < 1e-12);
         // Behind the eye, far beyond the margin.
-        assert!((view_factor(facing(-5.0, 0.5), &view(), &p) - p.mu_out).abs() < 1e-12);
+        assert!((triangle_view_factor(&facing(-5.0, 0.5), &view(), &p) - p.mu_out).abs() < 1e-12);
     }
 
     #[test]

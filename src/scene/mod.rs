@@ -67,6 +67,26 @@ pub enum RemeshMode {
 }
 
 impl RemeshMode {
+    /// The modes' names in scene files and on the command line.
+    pub const NAMES: [&'static str; 3] = ["uniform", "adaptive", "view"];
+
+    pub fn parse(name: &str) -> Option<RemeshMode> {
+        match name {
+            "uniform" => Some(RemeshMode::Uniform),
+            "adaptive" => Some(RemeshMode::Adaptive),
+            "view" => Some(RemeshMode::View),
+            _ => None,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            RemeshMode::Uniform => "uniform",
+            RemeshMode::Adaptive => "adaptive",
+            RemeshMode::View => "view",
+        }
+    }
+
     /// Remeshed every frame from its sizing field (adaptive, with or without view factors).
     pub fn is_adaptive(self) -> bool {
         matches!(self, RemeshMode::Adaptive | RemeshMode::View)
@@ -255,6 +275,15 @@ impl Scene {
             n += 1;
         }
         n
+    }
+
+    /// The first cloth remeshed in view mode, when the scene has no camera to give its view
+    /// factors.
+    pub fn view_cloth_without_camera(&self) -> Option<usize> {
+        if self.camera.is_some() {
+            return None;
+        }
+        self.cloths.iter().position(|c| c.remesh.as_ref().is_some_and(|r| r.mode == RemeshMode::View))
     }
 
     pub fn time_step(&self) -> Real {

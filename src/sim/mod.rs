@@ -79,9 +79,7 @@ fn collision_world(scene: &Scene, t: Real) -> Option<CollisionWorld> {
 
 impl Simulation {
     pub fn new(mut scene: Scene) -> Result<Self, SimError> {
-        let view_cloth =
-            scene.cloths.iter().position(|c| c.remesh.as_ref().is_some_and(|r| r.mode == RemeshMode::View));
-        if let (Some(c), None) = (view_cloth, &scene.camera) {
+        if let Some(c) = scene.view_cloth_without_camera() {
             return Err(SimError::Input(InputError {
                 file: scene.file.clone(),
                 location: Some(format!("cloths[{c}].remesh.mode")),

@@ -8,15 +8,10 @@ use crate::sizing::{Combine, SizingParams, ViewParams};
 
 pub(super) fn remesh_params(ctx: &Ctx, path: &str, r: &RemeshSpec) -> Res<Remesh> {
     let mode = match r.mode.as_deref() {
-        None | Some("adaptive") => RemeshMode::Adaptive,
-        Some("uniform") => RemeshMode::Uniform,
-        Some("view") => RemeshMode::View,
-        Some(other) => {
-            return Err(ctx.err(
-                format!("{path}.mode"),
-                format!("expected \"adaptive\", \"uniform\" or \"view\", got \"{other}\""),
-            ))
-        }
+        None => RemeshMode::Adaptive,
+        Some(name) => RemeshMode::parse(name).ok_or_else(|| {
+            ctx.err(format!("{path}.mode"), format!("expected \"adaptive\", \"uniform\" or \"view\", got \"{name}\""))
+        })?,
     };
     let view = view_params(ctx, &format!("{path}.view"), r.view.as_ref())?;
     let opt = |field: &str, v: Option<f64>| v.map(|x| positive(ctx, &format!("{path}.{field}"), x)).transpose();
