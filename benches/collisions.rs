@@ -62,7 +62,7 @@ fn run(n: usize, frames: usize) -> Row {
     let scene = load_str(&scene_json(n), Path::new("bench_collisions.json"), Path::new("."), "bench_collisions")
         .unwrap_or_else(|e| panic!("bench scene: {e}"));
     let mut sim = Simulation::new(scene).unwrap_or_else(|e| panic!("setup: {e}"));
-    sim.timers.take();
+    sim.ws.timers.take();
     let clock = Instant::now();
     let mut penetrations = 0;
     for f in 1..=frames {
@@ -70,12 +70,12 @@ fn run(n: usize, frames: usize) -> Row {
         penetrations += sim.penetrations();
     }
     let wall = clock.elapsed().as_secs_f64();
-    let steps = sim.steps;
-    let mut stage_s: Vec<(String, f64)> = sim.timers.take().into_iter().collect();
+    let steps = sim.state.steps;
+    let mut stage_s: Vec<(String, f64)> = sim.ws.timers.take().into_iter().collect();
     stage_s.sort_by(|a, b| b.1.total_cmp(&a.1));
-    let c = &sim.counters;
+    let c = &sim.ws.counters;
     Row {
-        faces: sim.mesh.faces.len(),
+        faces: sim.state.mesh.faces.len(),
         steps,
         step_s: wall / steps as f64,
         stage_s,

@@ -117,7 +117,7 @@ fn vm_hwm_kb() -> u64 {
 
 fn state_hash(sim: &Simulation) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for node in &sim.mesh.nodes {
+    for node in &sim.state.mesh.nodes {
         for c in node.x.iter().chain(node.v.iter()) {
             for b in c.to_bits().to_le_bytes() {
                 h = (h ^ b as u64).wrapping_mul(0x0000_0100_0000_01b3);
@@ -137,19 +137,19 @@ fn child(n: usize, steps: usize) -> Row {
     let setup_s = clock.elapsed().as_secs_f64();
     // One warm-up step: first touches of the buffers, thread pool start-up.
     sim.step(H).unwrap_or_else(|e| panic!("warm-up step: {e}"));
-    sim.timers.take();
+    sim.ws.timers.take();
     let clock = Instant::now();
     for _ in 0..steps {
         sim.step(H).unwrap_or_else(|e| panic!("step: {e}"));
     }
     let wall = clock.elapsed().as_secs_f64() / steps as f64;
-    let t = sim.timers.take();
+    let t = sim.ws.timers.take();
     let per = |k: &str| t.get(k).copied().unwrap_or(0.0) / steps as f64;
     let (assembly, factorisation, solve) = (per("assembly"), per("factorisation"), per("solve"));
     Row {
         n,
-        faces: sim.mesh.faces.len(),
-        nodes: sim.mesh.nodes.len(),
+        faces: sim.state.mesh.faces.len(),
+        nodes: sim.state.mesh.nodes.len(),
         steps,
         setup_s,
         assembly,

@@ -20,8 +20,8 @@ use std::sync::Mutex;
 
 use serde::{Deserialize, Serialize};
 
-use crate::camera::Camera;
-use crate::scene::{self, InputError, RemeshMode, Scene};
+use crate::scene::{InputError, RemeshMode};
+use crate::shot::{self, ShotRequest};
 use crate::sim::{run_with_checkpoints, CheckpointOptions, RunOptions};
 
 #[derive(Deserialize)]
@@ -49,12 +49,11 @@ struct ShotSpec {
 
 /// One validated shot, ready to run.
 pub struct Shot {
+    /// The scene file as the shots file names it (relative to the shots file's directory).
     pub scene_file: PathBuf,
-    pub scene: Scene,
+    pub shot: shot::Shot,
     pub out: PathBuf,
     pub frames: Option<usize>,
-    mode: Option<RemeshMode>,
-    camera_file: Option<PathBuf>,
     checkpoint_every: Option<usize>,
 }
 
@@ -94,38 +93,31 @@ pub fn load(path: &Path) -> Result<Vec<Shot>, InputError> {
     for (i, s) in spec.shots.into_iter().enumerate() {
         let at = |field: &str| format!("shots[{i}].{field}");
         let scene_file = base.join(&s.scene);
-        let mut scene =
-            scene::load_file(&scene_file).map_err(|e| err(path, at("scene"), format!("{}: {e}", s.scene)))?;
-        let camera_file = s.camera.as_ref().map(|c| base.join(c));
-        if let Some(file) = &camera_file {
-            scene.camera = Some(Camera::load(file).map_err(|e| err(path, at("camera"), e.to_string()))?);
-        }
         let mode = match s.mode.as_deref() {
-            None => camera_file.as_ref().map(|_| RemeshMode::View),
+            None => None,
             Some(name) => Some(RemeshMode::parse(name).ok_or_else(|| {
                 err(path, at("mode"), format!("expected \"uniform\", \"adaptive\" or \"view\", got \"{name}\""))
             })?),
         };
-        if let Some(m) = mode {
-            if scene.set_remesh_mode(m) == 0 {
-                return Err(err(path, at("mode"), "the scene has no cloth with a remesh block"));
-            }
-            if scene.view_cloth_without_camera().is_some() {
-                return Err(err(path, at("mode"), "\"view\" needs a camera (the shot's or the scene's)"));
-            }
-        }
+        let request = ShotRequest {
+            scene: Some(scene_file.clone()),
+            base: None,
+            camera: s.camera.as_ref().map(|c| base.join(c)),
+            mode,
+            camera_implies_view: true,
+        };
+        let shot = shot::resolve(&request).map_err(|e| err(path, at(e.field.name()), e.error.to_string()))?;
         let positive = |v: Option<u64>, field: &str| match v {
             Some(0) => Err(err(path, at(field), "expected an integer ≥ 1, got 0")),
             v => Ok(v.map(|n| n as usize)),
         };
         let frames = positive(s.frames, "frames")?;
         let checkpoint_every = positive(s.checkpoint_every, "checkpoint_every")?;
-        let stem = scene_file.file_stem().map(|x| x.to_string_lossy().into_owned()).unwrap_or_else(|| "scene".into());
-        let out = base.join(s.out.unwrap_or_else(|| format!("out/{stem}")));
+        let out = base.join(s.out.unwrap_or_else(|| format!("out/{}", shot.stem)));
         if let Some(j) = shots.iter().position(|o| o.out == out) {
             return Err(err(path, at("out"), format!("{} is also shot {j}'s output directory", out.display())));
         }
-        shots.push(Shot { scene_file, scene, out, frames, mode, camera_file, checkpoint_every });
+        shots.push(Shot { scene_file, shot, out, frames, checkpoint_every });
     }
     Ok(shots)
 }
@@ -162,15 +154,16 @@ pub fn run_shots(
 }
 
 fn run_one(shot: Shot, threads: usize) -> ShotResult {
-    let Shot { scene_file, scene, out, frames, mode, camera_file, checkpoint_every } = shot;
+    let Shot { scene_file, shot, out, frames, checkpoint_every } = shot;
     let clock = std::time::Instant::now();
     let opts = RunOptions { out_dir: out.clone(), frames, quiet: true, export_obstacles: false };
     let ck = checkpoint_every.map(|every| CheckpointOptions {
         every,
-        scene_file: std::path::absolute(&scene_file).ok(),
-        mode,
-        camera_file: camera_file.as_ref().and_then(|c| std::path::absolute(c).ok()),
+        scene_file: shot.scene_file,
+        mode: shot.mode,
+        camera_file: shot.camera_file,
     });
+    let scene = shot.scene;
     let outcome =
         rayon::ThreadPoolBuilder::new().num_threads(threads.max(1)).build().map_err(|e| e.to_string()).and_then(
             |pool| pool.install(|| run_with_checkpoints(scene, &opts, ck.as_ref())).map_err(|e| e.to_string()),

@@ -7,6 +7,7 @@
 
 pub mod batch;
 pub mod camera;
+pub mod cli;
 pub mod collision;
 pub mod compare;
 pub mod forces;
@@ -17,6 +18,7 @@ pub mod metrics;
 pub mod remesh;
 pub mod render;
 pub mod scene;
+pub mod shot;
 pub mod sim;
 pub mod sizing;
 pub mod solver;

@@ -576,10 +576,10 @@ fn hinge_directions_follow_arcsims_bias_coordinate() {
 fn simulate_faces(conf: &Path, frames: usize, mut each: impl FnMut(usize, &Simulation)) -> Vec<usize> {
     let scene = scene::load_path(conf, None).unwrap().scene;
     let mut sim = Simulation::new(scene).unwrap();
-    let mut faces = vec![sim.mesh.faces.len()];
+    let mut faces = vec![sim.state.mesh.faces.len()];
     for f in 1..=frames {
         sim.advance_frame().unwrap_or_else(|e| panic!("{}: frame {f}: {e}", conf.display()));
-        faces.push(sim.mesh.faces.len());
+        faces.push(sim.state.mesh.faces.len());
         each(f, &sim);
     }
     faces
@@ -613,10 +613,10 @@ fn sphere_clearance_is_never_negative() {
     let Some(dir) = arcsim_dir("sphere_clearance_is_never_negative") else { return };
     let mut worst = Real::INFINITY;
     simulate_faces(&dir.join("conf/sphere.json"), SPHERE_TEST_FRAMES, |f, sim| {
-        let world = sim.collisions.as_ref().unwrap();
+        let world = sim.ws.collisions.as_ref().unwrap();
         let body = &world.bodies[0];
-        let sdf = MeshSdf::new(body.triangles(), &body.positions_at(sim.time));
-        let x = sim.mesh.positions();
+        let sdf = MeshSdf::new(body.triangles(), &body.positions_at(sim.state.time));
+        let x = sim.state.mesh.positions();
         let d = sdf.query_all(&x).into_iter().flatten().map(|h| h.distance).fold(Real::INFINITY, Real::min);
         assert!(d >= 0.0, "frame {f}: a cloth node is {:.2e} m inside the sphere", -d);
         worst = worst.min(d);

@@ -47,11 +47,11 @@ fn frames_to_run(scene: &Scene, short: usize) -> usize {
 /// Signed distance of every cloth node to every obstacle, from the obstacles' world meshes at
 /// the simulation time: the smallest one, with its node and obstacle.
 fn min_clearance(sim: &Simulation) -> (Real, usize, String) {
-    let world = sim.collisions.as_ref().expect("a scene with obstacles has a collision world");
-    let x = sim.mesh.positions();
+    let world = sim.ws.collisions.as_ref().expect("a scene with obstacles has a collision world");
+    let x = sim.state.mesh.positions();
     let mut worst = (Real::INFINITY, 0, String::new());
     for body in &world.bodies {
-        let sdf = MeshSdf::new(body.triangles(), &body.positions_at(sim.time));
+        let sdf = MeshSdf::new(body.triangles(), &body.positions_at(sim.state.time));
         for (i, hit) in sdf.query_all(&x).into_iter().enumerate() {
             let d = hit.expect("obstacle has faces").distance;
             if d < worst.0 {
@@ -64,16 +64,16 @@ fn min_clearance(sim: &Simulation) -> (Real, usize, String) {
 
 /// Stats and the independent check agree that no node is deeper than thickness / 2.
 fn assert_no_penetration(sim: &Simulation, what: &str) {
-    let th = sim.collisions.as_ref().unwrap().params.thickness;
+    let th = sim.ws.collisions.as_ref().unwrap().params.thickness;
     let (d, node, obstacle) = min_clearance(sim);
-    assert!(d >= -0.5 * th, "{what}, t = {:.3}: node {node} is {:.2} mm inside '{obstacle}'", sim.time, -d * 1e3);
-    assert_eq!(sim.penetrations(), 0, "{what}, t = {:.3}: penetration count", sim.time);
+    assert!(d >= -0.5 * th, "{what}, t = {:.3}: node {node} is {:.2} mm inside '{obstacle}'", sim.state.time, -d * 1e3);
+    assert_eq!(sim.penetrations(), 0, "{what}, t = {:.3}: penetration count", sim.state.time);
 }
 
 /// Faces of the combined cloth mesh that intersect without sharing a node (exact test over all
 /// such pairs, pruned by bounding boxes).
 fn self_intersections(sim: &Simulation) -> Vec<(usize, usize)> {
-    let m = &sim.mesh;
+    let m = &sim.state.mesh;
     let faces: Vec<[usize; 3]> = (0..m.faces.len()).map(|f| m.face_nodes(f)).collect();
     let tri = |f: usize| faces[f].map(|i| m.nodes[i].x);
     let boxes: Vec<(Vec3, Vec3)> = (0..faces.len())
@@ -156,7 +156,7 @@ fn tablecloth_pull_never_penetrates() {
         assert_no_penetration(&sim, &format!("tablecloth_pull frame {f}"));
     }
     // The cloth left the table (it was pulled, not left behind).
-    let x = sim.mesh.positions();
+    let x = sim.state.mesh.positions();
     let centroid = x.iter().sum::<Vec3>() / x.len() as Real;
     assert!(centroid.x < -1.0, "tablecloth centroid still at x = {:.2}", centroid.x);
 }
@@ -182,7 +182,7 @@ fn sheet_fold_never_penetrates_the_ground_or_itself() {
         );
     }
     // It did fold onto itself: some node lies above another part of the sheet.
-    let x = sim.mesh.positions();
+    let x = sim.state.mesh.positions();
     let height = x.iter().map(|p| p.z).fold(Real::NEG_INFINITY, Real::max);
     assert!(height > 0.05, "the pile is only {height:.3} m high: the sheet did not fold");
 }
@@ -230,14 +230,14 @@ fn patch_thrown_at_20_m_per_s_does_not_tunnel_through_a_thin_plane() {
         let mut closest = Real::INFINITY;
         for _ in 0..40 {
             sim.step(sim.scene.time_step()).unwrap();
-            for (i, n) in sim.mesh.nodes.iter().enumerate() {
+            for (i, n) in sim.state.mesh.nodes.iter().enumerate() {
                 assert!(n.x.x.abs() < 4.0 && n.x.y.abs() < 4.0, "node {i} left the plane's extent");
                 assert!(n.x.z > 0.0, "thrown at {velocity:?}: node {i} crossed the plane (z = {})", n.x.z);
                 closest = closest.min(n.x.z);
             }
         }
         assert!(closest < 0.01, "thrown at {velocity:?}: the patch never reached the plane");
-        assert!(sim.counters.impacts > 0, "thrown at {velocity:?}: CCD found no impact");
+        assert!(sim.ws.counters.impacts > 0, "thrown at {velocity:?}: CCD found no impact");
         assert_no_penetration(&sim, "thrown patch");
     }
 }
@@ -263,7 +263,8 @@ fn incline_slide(mu: Real) -> Real {
         "collision": { "thickness": th, "friction": mu }
     });
     let mut sim = Simulation::new(inline_scene(&v, Path::new("."), "incline")).unwrap();
-    let centroid = |sim: &Simulation| sim.mesh.nodes.iter().map(|n| n.x).sum::<Vec3>() / sim.mesh.nodes.len() as Real;
+    let centroid =
+        |sim: &Simulation| sim.state.mesh.nodes.iter().map(|n| n.x).sum::<Vec3>() / sim.state.mesh.nodes.len() as Real;
     for _ in 0..5 {
         sim.advance_frame().unwrap();
     }
@@ -344,35 +345,35 @@ fn flag_on_pole() -> Scene {
 fn handle_on_a_moving_obstacle_follows_it_exactly() {
     let scene = flag_on_pole();
     let mut sim = Simulation::new(scene).unwrap();
-    let handle = sim.scene.handles[0].clone();
-    assert_eq!(handle.nodes.len(), 11);
-    let body = sim.collisions.as_ref().unwrap().bodies[0].clone();
+    let handle_nodes = sim.state.handle_nodes[0].clone();
+    assert_eq!(handle_nodes.len(), 11);
+    let body = sim.ws.collisions.as_ref().unwrap().bodies[0].clone();
     // In the pole's own frame the handle nodes never move, and their distance to the pole's
     // surface (from its world mesh) stays what it was.
     let local = |x: &Vec3, t: Real| body.transform_at(t).inverse().apply(x);
     let clearance =
         |x: &Vec3, t: Real| MeshSdf::new(body.triangles(), &body.positions_at(t)).query(x).unwrap().distance;
-    let local0: Vec<Vec3> = handle.nodes.iter().map(|&n| local(&sim.mesh.nodes[n].x, 0.0)).collect();
-    let clear0: Vec<Real> = handle.nodes.iter().map(|&n| clearance(&sim.mesh.nodes[n].x, 0.0)).collect();
-    let moved0 = sim.mesh.nodes[handle.nodes[0]].x;
+    let local0: Vec<Vec3> = handle_nodes.iter().map(|&n| local(&sim.state.mesh.nodes[n].x, 0.0)).collect();
+    let clear0: Vec<Real> = handle_nodes.iter().map(|&n| clearance(&sim.state.mesh.nodes[n].x, 0.0)).collect();
+    let moved0 = sim.state.mesh.nodes[handle_nodes[0]].x;
     for _ in 0..200 {
         sim.step(sim.scene.time_step()).unwrap();
-        for (k, &n) in handle.nodes.iter().enumerate() {
-            let x = sim.mesh.nodes[n].x;
+        for (k, &n) in handle_nodes.iter().enumerate() {
+            let x = sim.state.mesh.nodes[n].x;
             assert!(
-                (local(&x, sim.time) - local0[k]).norm() < 1e-12,
+                (local(&x, sim.state.time) - local0[k]).norm() < 1e-12,
                 "t = {:.3}: handle node {n} drifted in the pole's frame",
-                sim.time
+                sim.state.time
             );
             assert!(
-                (clearance(&x, sim.time) - clear0[k]).abs() < 1e-9,
+                (clearance(&x, sim.state.time) - clear0[k]).abs() < 1e-9,
                 "t = {:.3}: clearance of node {n} changed",
-                sim.time
+                sim.state.time
             );
-            assert_eq!(x, handle.target(k, sim.time));
+            assert_eq!(x, sim.scene.handles[0].target(k, sim.state.time));
         }
     }
-    assert!((sim.mesh.nodes[handle.nodes[0]].x - moved0).norm() > 0.3, "the pole did not carry the handle");
+    assert!((sim.state.mesh.nodes[handle_nodes[0]].x - moved0).norm() > 0.3, "the pole did not carry the handle");
     assert_no_penetration(&sim, "flag on pole");
 }
 
@@ -428,10 +429,10 @@ fn issue_far_side_faces_of_a_thin_obstacle_do_not_push_nodes_through() {
         node.x += out * (0.01 + 0.002) - axis * 0.3;
     }
     let mut sim = Simulation::new(scene).unwrap();
-    assert_eq!(sim.pushed_out, 0);
-    let n = sim.mesh.nodes.len();
-    let mesh = sim.mesh.clone();
-    let contacts = sim.collisions.as_mut().unwrap().proximity(&mesh, &vec![1e-4; n]);
+    assert_eq!(sim.state.pushed_out, 0);
+    let n = sim.state.mesh.nodes.len();
+    let mesh = sim.state.mesh.clone();
+    let contacts = sim.ws.collisions.as_mut().unwrap().proximity(&mesh, &vec![1e-4; n]);
     let node_face: Vec<_> = contacts.iter().filter(|c| c.nodes[0] < n && c.nodes[1] >= n && c.w[0] == 1.0).collect();
     assert_eq!(node_face.len(), n, "one contact per node with the plank: {node_face:?}");
     for c in node_face {
@@ -458,9 +459,9 @@ fn issue_obstacle_moving_farther_than_the_thickness_in_a_step_still_repels_the_c
         "collision": { "thickness": 0.004 }
     });
     let mut sim = Simulation::new(inline_scene(&v, Path::new("."), "sweep")).unwrap();
-    let n = sim.mesh.nodes.len();
-    let mesh = sim.mesh.clone();
-    let world = sim.collisions.as_mut().unwrap();
+    let n = sim.state.mesh.nodes.len();
+    let mesh = sim.state.mesh.clone();
+    let world = sim.ws.collisions.as_mut().unwrap();
     // The block rises 9 mm over the step: the patch, 1 mm above it, ends 8 mm inside.
     world.obs_x1 = world.obs_x0.iter().map(|p| p + Vec3::new(0.0, 0.0, 0.009)).collect();
     let contacts = world.proximity(&mesh, &vec![1e-4; n]);
@@ -497,14 +498,14 @@ fn issue_handle_driven_into_an_obstacle_does_not_exhaust_the_iterations() {
     for _ in 0..10 {
         sim.advance_frame().unwrap();
     }
-    let c = &sim.counters;
+    let c = &sim.ws.counters;
     assert_eq!(c.cap_hits, 0, "{c:?}");
     // The free nodes dragged along against the block still need a few iterations per step (about
     // 17 here), far from the cap of 100.
     assert!(c.ccd_iterations <= 40 * 80, "{} CCD iterations in 80 steps", c.ccd_iterations);
     // The handle went in (it wins over collisions); the free nodes did not.
-    let x = sim.mesh.positions();
-    let pinned = &sim.scene.handles[0].nodes;
+    let x = sim.state.mesh.positions();
+    let pinned = &sim.state.handle_nodes[0];
     assert!(pinned.iter().all(|&i| x[i].z < 0.37));
     assert!((0..x.len()).filter(|i| !pinned.contains(i)).all(|i| x[i].z > 0.4), "a free node entered the block");
 }
@@ -532,8 +533,8 @@ fn sheet_2_mm_inside_a_box_is_pushed_out_before_the_first_step_and_stays_out() {
     let th = scene.collision.thickness;
     let nodes = scene.mesh.nodes.len();
     let mut sim = Simulation::new(scene).unwrap();
-    assert_eq!(sim.pushed_out, nodes, "every node was 2 mm inside");
-    assert_eq!(sim.steps, 0);
+    assert_eq!(sim.state.pushed_out, nodes, "every node was 2 mm inside");
+    assert_eq!(sim.state.steps, 0);
     let (d, node, _) = min_clearance(&sim);
     assert!(d >= th - 1e-12, "before the first step node {node} is at {d:.4} m (pushed to the thickness {th})");
     for f in 1..=25 {
@@ -584,7 +585,7 @@ fn inflating_sphere_sequence_is_interpolated_and_the_cloth_on_it_never_penetrate
     let scene = inline_scene(&v, &dir, "inflate");
     let mut sim = Simulation::new(scene).unwrap();
     // Interpolated between files: halfway between files 4 and 5 the top vertex is halfway.
-    let body = sim.collisions.as_ref().unwrap().bodies[0].clone();
+    let body = sim.ws.collisions.as_ref().unwrap().bodies[0].clone();
     let top = (0..unit.len()).max_by(|&a, &b| unit[a].z.total_cmp(&unit[b].z)).unwrap();
     let mid = body.positions_at(0.2 + 4.5 / 25.0)[top].z;
     let expected = unit[top].z * 0.5 * (radius(4) + radius(5));
@@ -595,7 +596,7 @@ fn inflating_sphere_sequence_is_interpolated_and_the_cloth_on_it_never_penetrate
         sim.advance_frame().unwrap();
         assert_no_penetration(&sim, &format!("inflating sphere frame {f}"));
         // Node 220 is the middle of the 20 × 20 sheet.
-        lifted = lifted.max(sim.mesh.nodes[220].x.z);
+        lifted = lifted.max(sim.state.mesh.nodes[220].x.z);
     }
     // The sheet rode up with the sphere (its middle now rests on r = 0.3).
     assert!(lifted > 0.295, "the sheet's middle only reached z = {lifted:.3}");

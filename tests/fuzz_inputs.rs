@@ -256,6 +256,6 @@ fn random_valid_scenes_load_and_step() {
         for _ in 0..2 {
             sim.advance_frame().unwrap_or_else(|e| panic!("{e}\n{v}"));
         }
-        assert!(sim.mesh.nodes.iter().all(|n| n.x.iter().chain(n.v.iter()).all(|c| c.is_finite())), "{v}");
+        assert!(sim.state.mesh.nodes.iter().all(|n| n.x.iter().chain(n.v.iter()).all(|c| c.is_finite())), "{v}");
     }
 }

@@ -164,7 +164,7 @@ fn restored_state_continues_bitwise() {
     std::fs::write(&file, &text).unwrap();
     let load = || scene::load_file(&file).unwrap();
     let mut a = Simulation::new(load()).unwrap();
-    let faces0 = a.mesh.faces.len();
+    let faces0 = a.state.mesh.faces.len();
     for _ in 0..5 {
         a.advance_frame().unwrap();
     }
@@ -179,7 +179,7 @@ fn restored_state_continues_bitwise() {
         every: 5,
     };
     let path = checkpoint::checkpoint_path(&dir, 5, 4);
-    std::fs::write(&path, checkpoint::encode(&run, &a.state(), &Default::default())).unwrap();
+    std::fs::write(&path, checkpoint::encode(&run, &a.state, &Default::default())).unwrap();
     let ck = checkpoint::read(&path).unwrap();
     assert_eq!(ck.run, run);
     let mut b = Simulation::restore(load(), ck.state).unwrap();
@@ -187,7 +187,7 @@ fn restored_state_continues_bitwise() {
         a.advance_frame().unwrap();
         b.advance_frame().unwrap();
         let bits = |s: &Simulation| -> Vec<u64> {
-            let m = &s.mesh;
+            let m = &s.state.mesh;
             let mut v: Vec<u64> = m
                 .nodes
                 .iter()
@@ -197,16 +197,16 @@ fn restored_state_continues_bitwise() {
                 .collect();
             v.extend(m.verts.iter().flat_map(|x| [x.u.x.to_bits(), x.u.y.to_bits(), x.node.0 as u64]));
             v.extend(m.faces.iter().flat_map(|x| x.v.map(|i| i.0 as u64)));
-            v.extend(s.scene.handles.iter().flat_map(|h| h.nodes.iter().map(|&n| n as u64)));
-            v.extend(s.rest_angles().iter().map(|a| a.to_bits()));
-            v.push(s.time.to_bits());
-            v.push(s.steps);
+            v.extend(s.state.handle_nodes.iter().flatten().map(|&n| n as u64));
+            v.extend(s.state.rest_angles.iter().map(|a| a.to_bits()));
+            v.push(s.state.time.to_bits());
+            v.push(s.state.steps);
             v
         };
         assert!(bits(&a) == bits(&b), "frame {f}: the restored run differs");
     }
     // The comparison covered a remeshed state.
-    assert_ne!(a.mesh.faces.len(), faces0);
+    assert_ne!(a.state.mesh.faces.len(), faces0);
     std::fs::remove_dir_all(&dir).ok();
 }
 

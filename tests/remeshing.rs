@@ -35,7 +35,7 @@ fn run_cli(scene: &Path, out: &Path, extra: &[&str]) -> Value {
 }
 
 fn total_material_area(sim: &Simulation) -> f64 {
-    (0..sim.mesh.faces.len()).map(|f| sim.mesh.material_area(f)).sum()
+    (0..sim.state.mesh.faces.len()).map(|f| sim.state.mesh.material_area(f)).sum()
 }
 
 #[test]
@@ -45,15 +45,15 @@ fn crumple_square_stays_valid_and_keeps_area_and_handles() {
     let area0 = total_material_area(&sim);
     let mut changed = false;
     for _ in 0..90 {
-        let faces_before = sim.mesh.faces.len();
+        let faces_before = sim.state.mesh.faces.len();
         sim.advance_frame().unwrap();
-        changed |= sim.mesh.faces.len() != faces_before;
-        sim.mesh.validate().unwrap();
+        changed |= sim.state.mesh.faces.len() != faces_before;
+        sim.state.mesh.validate().unwrap();
         let area = total_material_area(&sim);
         assert!((area - area0).abs() <= 1e-9 * area0, "material area {area} vs {area0}");
-        for h in &sim.scene.handles {
-            for (k, &n) in h.nodes.iter().enumerate() {
-                assert_eq!(sim.mesh.nodes[n].x, h.target(k, sim.time), "handle node moved off target");
+        for (h, nodes) in sim.scene.handles.iter().zip(&sim.state.handle_nodes) {
+            for (k, &n) in nodes.iter().enumerate() {
+                assert_eq!(sim.state.mesh.nodes[n].x, h.target(k, sim.state.time), "handle node moved off target");
             }
         }
     }
@@ -92,6 +92,6 @@ fn sheet_on_sphere_adaptive_uses_3x_fewer_faces_than_uniform_without_penetrating
     // The uniform reference never remeshes, so its face count is that of its initial mesh.
     let mut scene = scene::load_file(&scene_path("sheet_on_sphere.json")).unwrap();
     assert_eq!(scene.set_remesh_mode(RemeshMode::Uniform), 1);
-    let uniform_faces = Simulation::new(scene).unwrap().mesh.faces.len() as f64;
+    let uniform_faces = Simulation::new(scene).unwrap().state.mesh.faces.len() as f64;
     assert!(uniform_faces >= 3.0 * mean_adaptive, "uniform {uniform_faces} vs adaptive mean {mean_adaptive}");
 }

@@ -34,18 +34,18 @@ fn coarsen(v: &mut Value, n: usize) {
 }
 
 /// Asserts that every node held by a handle active at `t0` sits bitwise on its target at the
-/// end of the step to `sim.time`.
+/// end of the step to `sim.state.time`.
 fn assert_handles_on_target(sim: &Simulation, t0: Real) {
-    for (h, handle) in sim.scene.handles.iter().enumerate() {
+    for (h, (handle, nodes)) in sim.scene.handles.iter().zip(&sim.state.handle_nodes).enumerate() {
         if !handle.active(t0) {
             continue;
         }
-        for (k, &n) in handle.nodes.iter().enumerate() {
-            let (x, target) = (sim.mesh.nodes[n].x, handle.target(k, sim.time));
+        for (k, &n) in nodes.iter().enumerate() {
+            let (x, target) = (sim.state.mesh.nodes[n].x, handle.target(k, sim.state.time));
             assert!(
                 x.iter().zip(target.iter()).all(|(a, b)| a.to_bits() == b.to_bits()),
                 "step {}: handle {h} node {n} at {x:?}, target {target:?}",
-                sim.steps
+                sim.state.steps
             );
         }
     }
@@ -60,7 +60,7 @@ fn hanging_sheet_comes_to_rest_with_handles_in_place() {
     coarsen(&mut v, 8);
     let mut sim = Simulation::new(load(&v, "hanging_sheet")).unwrap();
     let anchors: Vec<(usize, Vec3)> =
-        sim.scene.handles.iter().flat_map(|h| h.nodes.iter().map(|&n| (n, sim.mesh.nodes[n].x))).collect();
+        sim.state.handle_nodes.iter().flatten().map(|&n| (n, sim.state.mesh.nodes[n].x)).collect();
     assert_eq!(anchors.len(), 2);
     let h = sim.scene.time_step();
     // Peak kinetic energy over windows of 2 s (50 frames): the sheet swings like a pendulum, so
@@ -72,14 +72,14 @@ fn hanging_sheet_comes_to_rest_with_handles_in_place() {
     let rest_fraction = 1e-5;
     loop {
         for _ in 0..sim.scene.steps_per_frame {
-            let t0 = sim.time;
+            let t0 = sim.state.time;
             sim.step(h).unwrap();
             assert_handles_on_target(&sim, t0);
             for &(n, x0) in &anchors {
                 assert!(
-                    sim.mesh.nodes[n].x == x0,
+                    sim.state.mesh.nodes[n].x == x0,
                     "fixed handle node {n} moved to {:?} (from {x0:?})",
-                    sim.mesh.nodes[n].x
+                    sim.state.mesh.nodes[n].x
                 );
             }
         }
@@ -103,7 +103,7 @@ fn hanging_sheet_comes_to_rest_with_handles_in_place() {
     let stats = sim.measure(frame);
     assert!(stats.mean_strain < 0.02, "mean strain at rest {:.4} ≥ 2%", stats.mean_strain);
     // At rest the sheet hangs below its handles.
-    let top = sim.mesh.nodes.iter().map(|n| n.x.z).fold(Real::MIN, Real::max);
+    let top = sim.state.mesh.nodes.iter().map(|n| n.x.z).fold(Real::MIN, Real::max);
     assert!(top <= 1.0 + 1e-9);
 }
 
@@ -117,24 +117,24 @@ fn keyframed_handle_follows_its_motion_exactly() {
         { "time": 0.6, "translate": [0.1, -0.1, 0.0], "rotate": [30, 0, 0, 1] }
     ]);
     let mut sim = Simulation::new(load(&v, "hanging_sheet")).unwrap();
-    let moving = sim.scene.handles[1].nodes[0];
-    let x0 = sim.mesh.nodes[moving].x;
-    let fixed = sim.scene.handles[0].nodes[0];
-    let fixed_x0 = sim.mesh.nodes[fixed].x;
+    let moving = sim.state.handle_nodes[1][0];
+    let x0 = sim.state.mesh.nodes[moving].x;
+    let fixed = sim.state.handle_nodes[0][0];
+    let fixed_x0 = sim.state.mesh.nodes[fixed].x;
     let h = sim.scene.time_step();
     let mut farthest: Real = 0.0;
-    while sim.time < 0.8 {
-        let t0 = sim.time;
+    while sim.state.time < 0.8 {
+        let t0 = sim.state.time;
         sim.step(h).unwrap();
         assert_handles_on_target(&sim, t0);
-        assert!(sim.mesh.nodes[fixed].x == fixed_x0);
-        farthest = farthest.max((sim.mesh.nodes[moving].x - x0).norm());
+        assert!(sim.state.mesh.nodes[fixed].x == fixed_x0);
+        farthest = farthest.max((sim.state.mesh.nodes[moving].x - x0).norm());
     }
     assert!(farthest > 0.1, "the keyframed handle barely moved ({farthest} m)");
     // After the last key the motion holds the last key's transform.
     let last = viewcloth::scene::motion::Transform::new([0.1, -0.1, 0.0], Some([30.0, 0.0, 0.0, 1.0]), 1.0);
     let expected = last.apply(&x0);
-    let got = sim.mesh.nodes[moving].x;
+    let got = sim.state.mesh.nodes[moving].x;
     assert!((got - expected).norm() < 1e-12, "after the last keyframe the handle is at {got:?}, expected {expected:?}");
 }
 
@@ -156,7 +156,7 @@ fn deformed_free_sheet(scale: Real, damping: Real) -> Simulation {
         seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         ((seed >> 11) as Real / (1u64 << 53) as Real) - 0.5
     };
-    for n in sim.mesh.nodes.iter_mut() {
+    for n in sim.state.mesh.nodes.iter_mut() {
         let p = n.x;
         let (u, w) = (p.x + 0.5, p.y + 0.5);
         let bulge = 0.05 * (pi * u).sin() * (pi * w).sin();
@@ -228,7 +228,7 @@ fn run_drape(steps_per_frame: usize, seconds: Real, monotone: bool) {
     // the two top corners, plus a few percent of stretch.
     let anchors: Vec<Vec3> = sim.scene.handles.iter().flat_map(|h| h.anchors.clone()).collect();
     let mid = anchors.iter().fold(Vec3::zeros(), |a, p| a + p) / anchors.len() as Real;
-    let mass: Real = sim.mesh.nodes.iter().map(|n| n.mass).sum();
+    let mass: Real = sim.state.mesh.nodes.iter().map(|n| n.mass).sum();
     // The most kinetic energy the sheet could gain: all of it falling 1.2 m.
     let ke_max = mass * sim.scene.gravity.norm() * 1.2;
     let e_start = sim.measure(0).total_energy;
@@ -238,7 +238,7 @@ fn run_drape(steps_per_frame: usize, seconds: Real, monotone: bool) {
         sim.advance_frame().unwrap_or_else(|e| panic!("h = {h}: frame {f}: {e}"));
         let s = sim.measure(f);
         let what = format!("h = 1/{}, frame {f}", (1.0 / h).round());
-        for (i, n) in sim.mesh.nodes.iter().enumerate() {
+        for (i, n) in sim.state.mesh.nodes.iter().enumerate() {
             assert!(n.x.iter().chain(n.v.iter()).all(|c| c.is_finite()), "{what}: node {i} non-finite");
             let d = (n.x - mid).norm();
             assert!(d < 1.2, "{what}: node {i} at {:?}, {d} m from the handles", n.x);
@@ -343,7 +343,8 @@ fn state_is_bitwise_identical_across_thread_counts() {
             for _ in 0..4 {
                 sim.advance_frame().unwrap();
             }
-            sim.mesh
+            sim.state
+                .mesh
                 .nodes
                 .iter()
                 .flat_map(|n| n.x.iter().chain(n.v.iter()).map(|c| c.to_bits()).collect::<Vec<_>>())

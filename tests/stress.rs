@@ -75,7 +75,7 @@ fn load(s: &Stress) -> Scene {
 
 /// Pairs of non-adjacent cloth triangles that intersect.
 fn self_intersections(sim: &Simulation) -> usize {
-    let m = &sim.mesh;
+    let m = &sim.state.mesh;
     let tris: Vec<[usize; 3]> = (0..m.faces.len()).map(|f| m.face_nodes(f)).collect();
     let boxes: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t.iter().map(|&n| &m.nodes[n].x))).collect();
     let bvh = Bvh::build(&boxes);
@@ -89,10 +89,10 @@ fn self_intersections(sim: &Simulation) -> usize {
 /// The elastic energy of the whole cloth stretched to strain `s` in both material directions.
 fn elastic_bound(sim: &Simulation, s: Real) -> Real {
     let e = 0.5 * ((1.0 + s) * (1.0 + s) - 1.0);
-    (0..sim.mesh.faces.len())
+    (0..sim.state.mesh.faces.len())
         .map(|f| {
-            let k = &sim.scene.materials[sim.mesh.faces[f].material as usize].membrane;
-            sim.mesh.material_area(f) * 0.5 * e * e * (k.k11 + 2.0 * k.k12 + k.k22)
+            let k = &sim.scene.materials[sim.state.mesh.faces[f].material as usize].membrane;
+            sim.state.mesh.material_area(f) * 0.5 * e * e * (k.k11 + 2.0 * k.k12 + k.k22)
         })
         .sum()
 }
@@ -101,7 +101,7 @@ fn elastic_bound(sim: &Simulation, s: Real) -> Real {
 fn run(s: &Stress) -> Result<(usize, usize), String> {
     let scene = load(s);
     let mut sim = Simulation::new(scene).map_err(|e| format!("{}: {e}", s.file))?;
-    let mass: Real = sim.mesh.nodes.iter().map(|n| n.mass).sum();
+    let mass: Real = sim.state.mesh.nodes.iter().map(|n| n.mass).sum();
     let g = sim.scene.gravity.norm();
     let e0 = sim.measure(0).total_energy;
     let work = if s.drive_speed > 0.0 {
@@ -114,12 +114,12 @@ fn run(s: &Stress) -> Result<(usize, usize), String> {
     let (mut retries, mut retried_frames) = (0, 0);
     for f in 1..=s.frames {
         sim.advance_frame().map_err(|e| format!("{}: frame {f}: {e}", s.file))?;
-        let faults = std::mem::take(&mut sim.faults);
+        let faults = std::mem::take(&mut sim.ws.faults);
         retries += faults.retries;
         retried_frames += (faults.retries > 0) as usize;
         let st = sim.measure(f);
         let what = format!("{} frame {f}", s.file);
-        if !sim.mesh.nodes.iter().all(|n| n.x.iter().chain(n.v.iter()).all(|c| c.is_finite())) {
+        if !sim.state.mesh.nodes.iter().all(|n| n.x.iter().chain(n.v.iter()).all(|c| c.is_finite())) {
             return Err(format!("{what}: non-finite state"));
         }
         if !(st.total_energy <= bound) {

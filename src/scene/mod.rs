@@ -277,13 +277,20 @@ impl Scene {
         n
     }
 
-    /// The first cloth remeshed in view mode, when the scene has no camera to give its view
-    /// factors.
-    pub fn view_cloth_without_camera(&self) -> Option<usize> {
+    /// Refuses a cloth remeshed in view mode when the scene has no camera to give its view
+    /// factors (an error naming that cloth's `remesh.mode`).
+    pub fn require_camera_for_view(&self) -> Result<(), InputError> {
         if self.camera.is_some() {
-            return None;
+            return Ok(());
         }
-        self.cloths.iter().position(|c| c.remesh.as_ref().is_some_and(|r| r.mode == RemeshMode::View))
+        match self.cloths.iter().position(|c| c.remesh.as_ref().is_some_and(|r| r.mode == RemeshMode::View)) {
+            Some(c) => Err(InputError {
+                file: self.file.clone(),
+                location: Some(format!("cloths[{c}].remesh.mode")),
+                msg: "\"view\" needs a camera: give the scene a \"camera\" file or pass --camera".into(),
+            }),
+            None => Ok(()),
+        }
     }
 
     pub fn time_step(&self) -> Real {

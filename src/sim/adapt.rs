@@ -4,15 +4,16 @@
 
 use std::collections::HashMap;
 
+use std::time::Instant;
+
 use crate::collision::sdf::MeshSdf;
-use crate::forces::RestState;
 use crate::math::{Mat2, Real};
 use crate::remesh::{remesh, Finished, RemeshLimits, RemeshStats};
 use crate::scene::RemeshMode;
 use crate::sizing::view::face_views;
 use crate::sizing::{face_metrics, vertex_metrics, FaceView, ObstaclePlane, SizingParams};
-use crate::solver::pattern::BlockPattern;
 
+use super::timers::Stage;
 use super::{SimError, Simulation};
 
 /// Obstacle features within this many collision thicknesses refine the cloth.
@@ -34,14 +35,12 @@ impl Simulation {
 
     /// Nodes the remesher must keep: handle nodes, and every node of a cloth not being remeshed.
     fn preserved_nodes(&self, params: &[Option<SizingParams>]) -> Vec<bool> {
-        let mut keep = vec![false; self.mesh.nodes.len()];
-        for h in &self.scene.handles {
-            for &n in &h.nodes {
-                keep[n] = true;
-            }
+        let mut keep = vec![false; self.state.mesh.nodes.len()];
+        for &n in self.state.handle_nodes.iter().flatten() {
+            keep[n] = true;
         }
         let cloth_material: Vec<usize> = self.scene.cloths.iter().map(|c| c.material).collect();
-        for (k, n) in self.mesh.nodes.iter().enumerate() {
+        for (k, n) in self.state.mesh.nodes.iter().enumerate() {
             if params[cloth_material[n.cloth as usize]].is_none() {
                 keep[k] = true;
             }
@@ -51,15 +50,15 @@ impl Simulation {
 
     /// Nearest obstacle plane of every node within range (only when a cloth asks for it).
     fn obstacle_planes(&self, params: &[Option<SizingParams>]) -> Vec<Option<ObstaclePlane>> {
-        let Some(world) = &self.collisions else { return Vec::new() };
+        let Some(world) = &self.ws.collisions else { return Vec::new() };
         if !params.iter().flatten().any(|p| p.refine_obstacle) || world.bodies.is_empty() {
             return Vec::new();
         }
         let range = OBSTACLE_RANGE * world.params.thickness;
-        let x = self.mesh.positions();
+        let x = self.state.mesh.positions();
         let mut best: Vec<Option<(Real, ObstaclePlane)>> = vec![None; x.len()];
         for body in &world.bodies {
-            let sdf = MeshSdf::new(body.triangles(), &body.positions_at(self.time));
+            let sdf = MeshSdf::new(body.triangles(), &body.positions_at(self.state.time));
             for (i, hit) in sdf.query_all(&x).into_iter().enumerate() {
                 let Some(hit) = hit else { continue };
                 let d = hit.distance.abs();
@@ -86,10 +85,10 @@ impl Simulation {
         if params.iter().all(Option::is_none) {
             return Vec::new();
         }
-        let clock = std::time::Instant::now();
+        let clock = Instant::now();
         let dt = self.scene.frame_time * every as Real;
-        let views = face_views(&self.mesh, camera, self.time, dt, &params);
-        self.timers.add("view", clock.elapsed().as_secs_f64());
+        let views = face_views(&self.state.mesh, camera, self.state.time, dt, &params);
+        self.ws.timers.since(Stage::View, clock);
         views
     }
 
@@ -101,54 +100,53 @@ impl Simulation {
             return Ok(RemeshStats::default());
         }
         let views = if mode.is_adaptive() { self.face_views() } else { Vec::new() };
-        let clock = std::time::Instant::now();
+        let clock = Instant::now();
         let face = match mode {
             RemeshMode::Adaptive | RemeshMode::View => {
-                face_metrics(&self.mesh, &params, &self.obstacle_planes(&params), &views)
+                face_metrics(&self.state.mesh, &params, &self.obstacle_planes(&params), &views)
             }
-            RemeshMode::Uniform => (0..self.mesh.faces.len())
-                .map(|f| match &params[self.mesh.faces[f].material as usize] {
+            RemeshMode::Uniform => (0..self.state.mesh.faces.len())
+                .map(|f| match &params[self.state.mesh.faces[f].material as usize] {
                     Some(p) => Mat2::identity() / (p.size_min * p.size_min),
                     None => Mat2::zeros(),
                 })
                 .collect(),
         };
-        let vsize = vertex_metrics(&self.mesh, &face);
-        self.timers.add("sizing", clock.elapsed().as_secs_f64());
-        let clock = std::time::Instant::now();
+        let vsize = vertex_metrics(&self.state.mesh, &face);
+        self.ws.timers.since(Stage::Sizing, clock);
+        let clock = Instant::now();
         let size_min = params.iter().flatten().map(|p| p.size_min).fold(Real::INFINITY, Real::min);
         let aspect_min = params.iter().flatten().map(|p| p.aspect_min).fold(1.0, Real::min);
         let limits = RemeshLimits { size_min, aspect_min, coarsen: mode.is_adaptive() };
         let preserved = self.preserved_nodes(&params);
-        let (finished, stats) = remesh(&self.mesh, vsize, preserved, &limits)
+        let (finished, stats) = remesh(&self.state.mesh, vsize, preserved, &limits)
             .map_err(|e| SimError::Mesh(format!("remeshing failed: {e}")))?;
         if stats.splits + stats.collapses + stats.flips > 0 {
             self.adopt(finished)?;
         }
-        self.timers.add("remesh", clock.elapsed().as_secs_f64());
+        self.ws.timers.since(Stage::Remesh, clock);
         Ok(stats)
     }
 
     /// Takes a remeshed mesh: handles renumbered, rest angles carried over by node pair (new
-    /// edges rest flat), masses and rest data rebuilt, the
-    /// implicit system's new pattern left for the next step to analyse.
+    /// edges rest flat), masses and rest data rebuilt, the implicit system's new pattern left
+    /// for the next step to analyse.
     fn adopt(&mut self, finished: Finished) -> Result<(), SimError> {
         let Finished { mesh, node_map } = finished;
+        let state = &mut self.state;
         let mut old_angles: HashMap<(usize, usize), Real> = HashMap::new();
-        for (e, edge) in self.mesh.edges.iter().enumerate() {
+        for (e, edge) in state.mesh.edges.iter().enumerate() {
             if let (Some(a), Some(b)) = (node_map[edge.n[0].idx()], node_map[edge.n[1].idx()]) {
-                old_angles.insert((a.min(b), a.max(b)), self.rest_angles[e]);
+                old_angles.insert((a.min(b), a.max(b)), state.rest_angles[e]);
             }
         }
-        for h in &mut self.scene.handles {
-            for n in &mut h.nodes {
-                *n = node_map[*n].ok_or_else(|| SimError::Mesh("remeshing removed a handle node".into()))?;
-            }
+        for n in state.handle_nodes.iter_mut().flatten() {
+            *n = node_map[*n].ok_or_else(|| SimError::Mesh("remeshing removed a handle node".into()))?;
         }
-        self.mesh = mesh;
+        state.mesh = mesh;
         let density: Vec<Real> = self.scene.materials.iter().map(|m| m.density).collect();
-        self.mesh.compute_masses(&density);
-        self.rest_angles = self
+        state.mesh.compute_masses(&density);
+        state.rest_angles = state
             .mesh
             .edges
             .iter()
@@ -157,24 +155,9 @@ impl Simulation {
                 old_angles.get(&(a.min(b), a.max(b))).copied().unwrap_or(0.0)
             })
             .collect();
-        let angles = &self.rest_angles;
-        self.rest = RestState::new(&self.mesh, |e| angles[e])
-            .map_err(|f| SimError::Mesh(format!("remeshing left face {f} degenerate")))?;
-        self.node_area = node_areas(&self.mesh, &self.rest);
-        self.extra_pairs.clear();
-        self.pending_pattern = Some(BlockPattern::new(&self.mesh, &self.rest.hinges, &[]));
+        state.extra_pairs.clear();
+        self.ws.remeshed(state)?;
         self.push_out(None)?;
         Ok(())
     }
-}
-
-/// A third of the adjacent faces' material area per node (m²).
-pub(super) fn node_areas(mesh: &crate::mesh::Mesh, rest: &RestState) -> Vec<Real> {
-    let mut area = vec![0.0; mesh.nodes.len()];
-    for f in 0..mesh.faces.len() {
-        for n in mesh.face_nodes(f) {
-            area[n] += rest.membrane[f].area / 3.0;
-        }
-    }
-    area
 }

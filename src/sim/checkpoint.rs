@@ -1,15 +1,11 @@
 //! Checkpoints: the whole simulation state at a frame boundary, from which `resume` continues
 //! bit-identically to an uninterrupted run.
 //!
-//! What is stored is exactly the state the next frame reads: the mesh (material coordinates,
-//! node positions, velocities, masses; the faces, from which edges are re-derived in the same
-//! deterministic order), the rest dihedral angles, the handles' node ids (remeshing renumbers
-//! them), the cloth–cloth pairs added to the system's sparsity pattern (they change the
-//! fill-reducing ordering, hence the rounding of the solve), time, step and frame counters.
-//! Everything else is a function of these and the scene: rest data, the implicit system,
-//! obstacle positions (functions of time), node areas. The broad phase's trees are not stored:
-//! they only decide the order in which candidates are found, and the broad phase sorts each
-//! query's results.
+//! What is stored is the `SimState` (`state.rs`): the mesh (material coordinates, node
+//! positions, velocities, masses; the faces, from which edges are re-derived in the same
+//! deterministic order), the rest dihedral angles, the handles' node ids, the cloth–cloth pairs
+//! added to the system's sparsity pattern, time, step and frame counters. The `Workspace` is
+//! rebuilt from it and the scene.
 //!
 //! Format (little endian): `VCLOTHCK`, format version (u32), the run record, the state, the run
 //! statistics so far (JSON), and an FNV-1a 64 checksum of everything before it. Reals are stored
@@ -18,13 +14,11 @@
 use std::path::{Path, PathBuf};
 
 use crate::io::stats::RunStats;
-use crate::math::{Real, Vec2, Vec3};
+use crate::math::{Vec2, Vec3};
 use crate::mesh::{Face, Mesh, Node, NodeId, Vert, VertId};
 use crate::scene::{RemeshMode, Scene};
-use crate::solver::pattern::BlockPattern;
-use crate::solver::ImplicitSystem;
 
-use super::{adapt, SimError, Simulation};
+use super::SimState;
 
 const MAGIC: &[u8; 8] = b"VCLOTHCK";
 const FORMAT_VERSION: u32 = 2;
@@ -60,19 +54,6 @@ pub struct RunRecord {
     pub export_obstacles: bool,
     /// A checkpoint every this many frames.
     pub every: usize,
-}
-
-/// The state a checkpoint holds (see the module doc).
-#[derive(Clone, Debug)]
-pub struct SimState {
-    pub frame: usize,
-    pub steps: u64,
-    pub time: Real,
-    pub pushed_out: usize,
-    pub mesh: Mesh,
-    pub rest_angles: Vec<Real>,
-    pub handle_nodes: Vec<Vec<usize>>,
-    pub extra_pairs: Vec<(usize, usize)>,
 }
 
 pub struct Checkpoint {
@@ -139,78 +120,6 @@ pub fn latest(dir: &Path) -> Result<(PathBuf, Checkpoint), CheckpointError> {
 pub fn read(path: &Path) -> Result<Checkpoint, CheckpointError> {
     let bytes = std::fs::read(path).map_err(|source| CheckpointError::Io { path: path.to_path_buf(), source })?;
     decode(&bytes).map_err(|msg| CheckpointError::Corrupt { path: path.to_path_buf(), msg })
-}
-
-impl Simulation {
-    /// The state a checkpoint holds.
-    pub fn state(&self) -> SimState {
-        SimState {
-            frame: self.frame,
-            steps: self.steps,
-            time: self.time,
-            pushed_out: self.pushed_out,
-            mesh: self.mesh.clone(),
-            rest_angles: self.rest_angles.clone(),
-            handle_nodes: self.scene.handles.iter().map(|h| h.nodes.clone()).collect(),
-            extra_pairs: self.extra_pairs.clone(),
-        }
-    }
-
-    /// Rebuilds a simulation of `scene` (as loaded from its file) at a checkpointed state.
-    pub fn restore(mut scene: Scene, st: SimState) -> Result<Self, SimError> {
-        let bad = |msg: String| SimError::Mesh(format!("checkpoint does not fit the scene: {msg}"));
-        if st.handle_nodes.len() != scene.handles.len() {
-            return Err(bad(format!("{} handles, the scene has {}", st.handle_nodes.len(), scene.handles.len())));
-        }
-        for (h, nodes) in scene.handles.iter_mut().zip(st.handle_nodes) {
-            if nodes.len() != h.nodes.len() || nodes.iter().any(|&n| n >= st.mesh.nodes.len()) {
-                return Err(bad("handle nodes".into()));
-            }
-            h.nodes = nodes;
-        }
-        if st.mesh.nodes.iter().any(|n| n.cloth as usize >= scene.cloths.len())
-            || st.mesh.faces.iter().any(|f| f.material as usize >= scene.materials.len())
-        {
-            return Err(bad("cloth or material index out of range".into()));
-        }
-        scene.mesh = Mesh::default();
-        let mut mesh = st.mesh;
-        mesh.rebuild_topology().map_err(|e| bad(e.to_string()))?;
-        mesh.validate().map_err(|e| bad(e.to_string()))?;
-        if st.rest_angles.len() != mesh.edges.len() {
-            return Err(bad(format!("{} rest angles for {} edges", st.rest_angles.len(), mesh.edges.len())));
-        }
-        let n = mesh.nodes.len();
-        if st.extra_pairs.iter().any(|&(i, j)| i >= n || j >= i) {
-            return Err(bad("contact pattern pair out of range".into()));
-        }
-        let angles = &st.rest_angles;
-        let rest = crate::forces::RestState::new(&mesh, |e| angles[e])
-            .map_err(|f| SimError::Mesh(format!("checkpoint face {f} is degenerate in material space")))?;
-        let system = ImplicitSystem::new(BlockPattern::new(&mesh, &rest.hinges, &st.extra_pairs))
-            .map_err(|source| SimError::Solve { step: st.steps, time: st.time, source })?;
-        let node_area = adapt::node_areas(&mesh, &rest);
-        let collisions = super::collision_world(&scene, st.time);
-        Ok(Simulation {
-            scene,
-            mesh,
-            rest_angles: st.rest_angles,
-            rest,
-            system,
-            pending_pattern: None,
-            extra_pairs: st.extra_pairs,
-            collisions,
-            node_area,
-            counters: Default::default(),
-            time: st.time,
-            steps: st.steps,
-            timers: Default::default(),
-            pushed_out: st.pushed_out,
-            frame: st.frame,
-            remesh_stats: Default::default(),
-            faults: Default::default(),
-        })
-    }
 }
 
 /// Serialises a checkpoint.

@@ -7,13 +7,14 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use crate::camera::Camera;
 use crate::io::obj::{frame_obj, obstacle_obj};
 use crate::io::stats::{CollisionFrameStats, RemeshFrameStats, RunStats};
 use crate::io::write_atomic;
-use crate::scene::{self, InputError, RemeshMode, Scene};
+use crate::scene::{InputError, RemeshMode, Scene};
+use crate::shot::{self, ShotRequest};
 
 use super::checkpoint::{self, CheckpointError, RunRecord};
+use super::timers::Stage;
 use super::{SimError, Simulation};
 
 pub struct RunOptions {
@@ -107,20 +108,14 @@ pub struct ResumeOptions {
 pub fn resume(dir: &Path, opts: &ResumeOptions) -> Result<RunStats, RunError> {
     let (path, ck) = checkpoint::latest(dir)?;
     let mut record = ck.run;
-    let mut scene = match &record.scene_file {
-        Some(file) => scene::load_file(file).map_err(RunError::Input)?,
-        None => {
-            let name = scene::DEFAULT_SCENE_NAME;
-            let file = PathBuf::from(format!("<built-in {name}>"));
-            scene::load_str(scene::DEFAULT_SCENE, &file, Path::new("."), name).map_err(RunError::Input)?
-        }
+    let request = ShotRequest {
+        scene: record.scene_file.clone(),
+        base: None,
+        camera: record.camera_file.clone(),
+        mode: record.mode,
+        camera_implies_view: false,
     };
-    if let Some(file) = &record.camera_file {
-        scene.camera = Some(Camera::load(file).map_err(RunError::Input)?);
-    }
-    if let Some(mode) = record.mode {
-        scene.set_remesh_mode(mode);
-    }
+    let scene = shot::resolve(&request).map_err(|e| RunError::Input(e.error))?.scene;
     if checkpoint::scene_fingerprint(&scene) != record.fingerprint {
         return Err(RunError::Input(InputError {
             file: scene.file.clone(),
@@ -195,18 +190,18 @@ impl Output<'_> {
     fn write_frame(&self, sim: &mut Simulation, f: usize) -> Result<(), RunError> {
         let path = self.frame_path(f);
         let clock = Instant::now();
-        write_atomic(&path, frame_obj(&sim.mesh, &self.names).as_bytes()).map_err(io_err(&path))?;
+        write_atomic(&path, frame_obj(&sim.state.mesh, &self.names).as_bytes()).map_err(io_err(&path))?;
         if self.export_obstacles {
-            if let Some(world) = &sim.collisions {
+            if let Some(world) = &sim.ws.collisions {
                 for (body, obstacle) in world.bodies.iter().zip(&sim.scene.obstacles) {
                     let path =
                         self.dir.join(format!("obstacle_{}_{f:0w$}.obj", file_safe(&obstacle.name), w = self.digits));
-                    let text = obstacle_obj(&body.positions_at(sim.time), body.triangles());
+                    let text = obstacle_obj(&body.positions_at(sim.state.time), body.triangles());
                     write_atomic(&path, text.as_bytes()).map_err(io_err(&path))?;
                 }
             }
         }
-        sim.timers.add("output", clock.elapsed().as_secs_f64());
+        sim.ws.timers.since(Stage::Output, clock);
         Ok(())
     }
 
@@ -226,12 +221,12 @@ impl Output<'_> {
         }
         let clock = Instant::now();
         let path = checkpoint::checkpoint_path(self.dir, f, self.digits);
-        write_atomic(&path, &checkpoint::encode(record, &sim.state(), stats)).map_err(io_err(&path))?;
+        write_atomic(&path, &checkpoint::encode(record, &sim.state, stats)).map_err(io_err(&path))?;
         let old = checkpoint::list(self.dir).map_err(io_err(self.dir))?;
         for (_, p) in old.iter().filter(|(k, _)| *k < f).skip(1) {
             let _ = std::fs::remove_file(p);
         }
-        sim.timers.add("checkpoint", clock.elapsed().as_secs_f64());
+        sim.ws.timers.since(Stage::Checkpoint, clock);
         Ok(())
     }
 
@@ -273,12 +268,12 @@ impl Output<'_> {
             self.write_frame(sim, f)?;
             let mut fs = sim.measure(f);
             if self.adaptive {
-                let r = std::mem::take(&mut sim.remesh_stats);
+                let r = std::mem::take(&mut sim.ws.remesh_stats);
                 fs.remesh = Some(RemeshFrameStats { splits: r.splits, flips: r.flips, collapses: r.collapses });
             }
-            if sim.collisions.is_some() {
+            if sim.ws.collisions.is_some() {
                 let clock = Instant::now();
-                let c = std::mem::take(&mut sim.counters);
+                let c = std::mem::take(&mut sim.ws.counters);
                 fs.collision = Some(CollisionFrameStats {
                     contacts: c.contacts,
                     impacts: c.impacts,
@@ -288,9 +283,9 @@ impl Output<'_> {
                     failed_zones: c.failed_zones,
                     penetrations: sim.penetrations(),
                 });
-                sim.timers.add("penetration_check", clock.elapsed().as_secs_f64());
+                sim.ws.timers.since(Stage::PenetrationCheck, clock);
             }
-            let faults = std::mem::take(&mut sim.faults);
+            let faults = std::mem::take(&mut sim.ws.faults);
             fs.steps = faults.steps;
             fs.retries = faults.retries;
             fs.min_step = faults.min_step;
@@ -299,12 +294,12 @@ impl Output<'_> {
             if f > 0 && (stats.min_step == 0.0 || fs.min_step < stats.min_step) {
                 stats.min_step = fs.min_step;
             }
-            fs.stage_s = sim.timers.take();
+            fs.stage_s = sim.ws.timers.take();
             fs.wall_s = clock.elapsed().as_secs_f64();
             stats.frames.push(fs);
-            for stage in &sim.timers.ran {
-                if !stats.stages.contains(stage) {
-                    stats.stages.push(stage.clone());
+            for stage in sim.ws.timers.ran() {
+                if !stats.stages.iter().any(|s| s == stage) {
+                    stats.stages.push(stage.to_string());
                 }
             }
             stats.total_wall_s = wall_before + started.elapsed().as_secs_f64();

@@ -1,32 +1,113 @@
-//! Wall-clock time per named stage, accumulated until taken.
+//! The named stages of a step and a frame, and the wall-clock time spent in each, accumulated
+//! until taken (per frame in stats.json).
 
 use std::collections::BTreeMap;
 use std::time::Instant;
 
+/// A stage of the step (`step.rs`) or of the frame (`adapt.rs`, `run.rs`). `name` is the key in
+/// stats.json (`stages`, `stage_s`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Stage {
+    /// Target velocities of the handle nodes.
+    Handles,
+    /// Repulsion contacts within the collision thickness (broad and narrow phase).
+    Proximity,
+    /// Element kernels summed into the implicit system.
+    Assembly,
+    /// Sparsity analysis and numeric Cholesky factorisation.
+    Factorisation,
+    /// Triangular solves.
+    Solve,
+    /// Positions and velocities from the solved velocity change.
+    Integration,
+    /// The Coulomb friction filter.
+    Friction,
+    /// Continuous collision detection and impact zones.
+    Collision,
+    /// The fault checks of `checks.rs`.
+    FaultChecks,
+    /// View factors of the faces (Koh et al. 2014), before a view-dependent remesh.
+    View,
+    /// The sizing field.
+    Sizing,
+    /// Splits, flips and collapses, and the state rebuilt on the new mesh.
+    Remesh,
+    /// Counting cloth nodes inside obstacles at the frame end.
+    PenetrationCheck,
+    /// Writing the frame's meshes.
+    Output,
+    /// Writing a checkpoint.
+    Checkpoint,
+}
+
+impl Stage {
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Handles => "handles",
+            Stage::Proximity => "proximity",
+            Stage::Assembly => "assembly",
+            Stage::Factorisation => "factorisation",
+            Stage::Solve => "solve",
+            Stage::Integration => "integration",
+            Stage::Friction => "friction",
+            Stage::Collision => "collision",
+            Stage::FaultChecks => "fault_checks",
+            Stage::View => "view",
+            Stage::Sizing => "sizing",
+            Stage::Remesh => "remesh",
+            Stage::PenetrationCheck => "penetration_check",
+            Stage::Output => "output",
+            Stage::Checkpoint => "checkpoint",
+        }
+    }
+}
+
 #[derive(Clone, Debug, Default)]
 pub struct StageTimers {
-    current: BTreeMap<String, f64>,
+    current: BTreeMap<Stage, f64>,
     /// Every stage that has run at least once, in first-run order.
-    pub ran: Vec<String>,
+    ran: Vec<Stage>,
 }
 
 impl StageTimers {
-    pub fn add(&mut self, stage: &str, seconds: f64) {
-        if !self.ran.iter().any(|s| s == stage) {
-            self.ran.push(stage.to_string());
+    pub fn add(&mut self, stage: Stage, seconds: f64) {
+        if !self.ran.contains(&stage) {
+            self.ran.push(stage);
         }
-        *self.current.entry(stage.to_string()).or_insert(0.0) += seconds;
+        *self.current.entry(stage).or_insert(0.0) += seconds;
     }
 
-    pub fn time<T>(&mut self, stage: &str, f: impl FnOnce() -> T) -> T {
-        let t = Instant::now();
-        let r = f();
-        self.add(stage, t.elapsed().as_secs_f64());
-        r
+    /// Adds the time since `clock` to `stage`.
+    pub fn since(&mut self, stage: Stage, clock: Instant) {
+        self.add(stage, clock.elapsed().as_secs_f64());
     }
 
-    /// The accumulated times since the last call, resetting them.
+    /// The names of the stages that have run, in first-run order.
+    pub fn ran(&self) -> impl Iterator<Item = &'static str> + '_ {
+        self.ran.iter().map(|s| s.name())
+    }
+
+    /// The accumulated times since the last call, by stage name, resetting them.
     pub fn take(&mut self) -> BTreeMap<String, f64> {
-        std::mem::take(&mut self.current)
+        std::mem::take(&mut self.current).into_iter().map(|(s, t)| (s.name().to_string(), t)).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn stages_listed_in_first_run_order_and_taken_by_name() {
+        let mut t = StageTimers::default();
+        t.add(Stage::Solve, 1.0);
+        t.add(Stage::Handles, 0.5);
+        t.add(Stage::Solve, 2.0);
+        assert_eq!(t.ran().collect::<Vec<_>>(), ["solve", "handles"]);
+        let taken = t.take();
+        assert_eq!(taken["solve"], 3.0);
+        assert_eq!(taken["handles"], 0.5);
+        assert!(t.take().is_empty());
+        assert_eq!(t.ran().count(), 2);
     }
 }

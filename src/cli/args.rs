@@ -1,0 +1,176 @@
+//! The command line's arguments (clap), as `viewcloth --help` shows them.
+
+use std::path::PathBuf;
+
+use clap::{Parser, Subcommand};
+
+use crate::scene::RemeshMode;
+
+#[derive(Parser)]
+#[command(name = "viewcloth", version, about = "Film cloth simulator: scene files in, one OBJ mesh per frame out")]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand)]
+pub enum Command {
+    /// Simulate a scene (the built-in default shot when no SCENE is given).
+    Simulate(SimulateArgs),
+    /// Continue a run from the last checkpoint in its output directory (the frames are
+    /// identical to an uninterrupted run's).
+    Resume(ResumeArgs),
+    /// Validate scene files (or ARCSim confs, or camera files) and the files they reference, without simulating.
+    Check {
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// Base directory for an ARCSim conf's paths (default: the conf's grand-parent directory).
+        #[arg(long)]
+        base: Option<PathBuf>,
+    },
+    /// Run a shot in several remeshing modes and report each one's error against a reference,
+    /// seen from the shot camera, with its run time (compare.json, compare.md, compare.svg).
+    Compare(CompareArgs),
+    /// Render PNG previews of a run's frames (RUN_DIR/view_NNNN.png) from a camera, shaded or
+    /// coloured by the cloth's view factor.
+    Render(RenderArgs),
+    /// Run many shots from a shots file (JSON list of scenes with per-shot options), several at a
+    /// time; a failed shot does not stop the others.
+    Batch {
+        shots: PathBuf,
+        /// Shots run at once (each gets an equal share of the cores).
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=256))]
+        jobs: u64,
+        /// Worker threads per shot (default: the cores divided by --jobs).
+        #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
+        threads: Option<u64>,
+        /// The summary JSON (default: out/<shots file stem>.batch.json).
+        #[arg(long)]
+        summary: Option<PathBuf>,
+        /// No line per finished shot.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Convert an ARCSim conf into a viewcloth scene file.
+    Convert {
+        conf: PathBuf,
+        /// The scene file to write; its paths are relative to its directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Base directory for the conf's paths (default: the conf's grand-parent directory).
+        #[arg(long)]
+        base: Option<PathBuf>,
+    },
+}
+
+#[derive(clap::Args)]
+pub struct SimulateArgs {
+    /// Scene file (JSON).
+    pub scene: Option<PathBuf>,
+    /// Number of frames to simulate (overrides the scene).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub frames: Option<u64>,
+    /// Output directory (default: out/<scene file stem>/).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Worker threads (default: all cores). Results are identical for any count.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
+    pub threads: Option<u64>,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Also write each obstacle's world-space mesh per frame beside the cloth frames.
+    #[arg(long)]
+    pub export_obstacles: bool,
+    /// Override the remeshing mode of every cloth with a `remesh` block: `adaptive`, `uniform`
+    /// (refined once to the minimum edge length, never remeshed) or `view` (adaptive, scaled by
+    /// the camera's view factors; needs a camera).
+    #[arg(long, value_parser = RemeshMode::NAMES)]
+    pub mode: Option<String>,
+    /// The shot camera (a camera JSON file) for view-dependent remeshing; implies `--mode view`
+    /// unless `--mode` is given.
+    #[arg(long, value_name = "FILE")]
+    pub camera: Option<PathBuf>,
+    /// Write a checkpoint every N frames (and at the last), for `viewcloth resume`.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    pub checkpoint_every: Option<u64>,
+    /// Base directory for an ARCSim conf's paths (default: the conf's grand-parent directory).
+    #[arg(long)]
+    pub base: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+pub struct ResumeArgs {
+    /// Output directory of a run started with --checkpoint-every.
+    pub dir: PathBuf,
+    /// Last frame of the continued run (default: the run's own).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub frames: Option<u64>,
+    /// Worker threads (default: all cores). Results are identical for any count.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
+    pub threads: Option<u64>,
+    /// No progress bar.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(clap::Args)]
+pub struct CompareArgs {
+    /// Scene file (JSON).
+    pub scene: PathBuf,
+    /// The shot camera (default: the scene's `camera`).
+    #[arg(long, value_name = "FILE")]
+    pub camera: Option<PathBuf>,
+    /// Number of frames to simulate (overrides the scene).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
+    pub frames: Option<u64>,
+    /// Output directory (default: out/<scene file stem>-compare/).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Modes compared with the reference, comma-separated.
+    #[arg(long, default_value = "adaptive,view", value_delimiter = ',', value_parser = RemeshMode::NAMES)]
+    pub modes: Vec<String>,
+    /// An existing run directory to use as the reference (default: a uniform run at the
+    /// adaptive minimum edge length, simulated here). No chaos floor is run then.
+    #[arg(long, value_name = "DIR")]
+    pub reference: Option<PathBuf>,
+    /// Skip the chaos-floor run (the reference re-run from perturbed positions).
+    #[arg(long)]
+    pub no_floor: bool,
+    /// Image size of the visible error, WIDTHxHEIGHT.
+    #[arg(long, default_value = "960x540")]
+    pub size: String,
+    /// Compare every N-th frame.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
+    pub every: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
+    pub threads: Option<u64>,
+    /// Only the table at the end.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    /// Output directory of a run (its stats.json and frame_NNNN.obj; obstacle_<name>_NNNN.obj
+    /// too when the run exported them).
+    #[arg(value_name = "RUN_DIR")]
+    pub dir: PathBuf,
+    /// The camera to render from (a camera JSON file), at each frame's time.
+    #[arg(long, value_name = "FILE")]
+    pub camera: PathBuf,
+    /// Frames A..B, both included (default: every frame of the run).
+    #[arg(long, value_name = "A..B")]
+    pub frames: Option<String>,
+    /// Every N-th frame, counted from the first.
+    #[arg(long, value_name = "N", default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..))]
+    pub every: u64,
+    /// Image size, WIDTHxHEIGHT (the camera's aspect is kept).
+    #[arg(long, default_value = "960x540")]
+    pub size: String,
+    /// `shade`: cloth light blue, obstacles salmon; `view`: cloth by its view factor, blue (0.1)
+    /// to red (1), obstacles grey.
+    #[arg(long, default_value = "shade", value_parser = ["shade", "view"])]
+    pub color: String,
+}

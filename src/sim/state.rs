@@ -1,0 +1,83 @@
+//! The simulation state: everything a checkpoint holds, from which the rest of a run (the
+//! `Workspace`) is rebuilt. Together with the scene it determines every later frame bit for bit.
+
+use crate::math::Real;
+use crate::mesh::Mesh;
+use crate::scene::Scene;
+
+use super::SimError;
+
+/// What a checkpoint stores (`checkpoint.rs`): the state the next frame reads.
+///
+/// Everything else is a function of this and the scene: rest data, masses of a restored mesh,
+/// the implicit system, obstacle positions (functions of time), node areas. The broad phase's
+/// trees are not stored: they only decide the order in which candidates are found, and the
+/// broad phase sorts each query's results.
+#[derive(Clone, Debug)]
+pub struct SimState {
+    /// Frames completed.
+    pub frame: usize,
+    /// Steps taken (retried halves count as steps).
+    pub steps: u64,
+    pub time: Real,
+    /// Cloth nodes pushed out of obstacles at load.
+    pub pushed_out: usize,
+    /// Material coordinates, node positions, velocities and masses, faces (edges re-derived).
+    pub mesh: Mesh,
+    /// Rest dihedral angle of each edge of `mesh`.
+    pub rest_angles: Vec<Real>,
+    /// The nodes of each of the scene's handles in `mesh` (remeshing renumbers them; the
+    /// scene's own `Handle::nodes` index its input mesh).
+    pub handle_nodes: Vec<Vec<usize>>,
+    /// Cloth–cloth node pairs (i > j) added to the system's sparsity pattern for self contacts
+    /// (they change the fill-reducing ordering, hence the rounding of the solve).
+    pub extra_pairs: Vec<(usize, usize)>,
+}
+
+impl SimState {
+    /// The state at load: the scene's input mesh at time 0, rest angles from its shape (zero on
+    /// cloths that rest flat).
+    pub fn initial(scene: &Scene) -> SimState {
+        let mesh = scene.mesh.clone();
+        let rest_angles = scene.rest_angles(&mesh);
+        SimState {
+            frame: 0,
+            steps: 0,
+            time: 0.0,
+            pushed_out: 0,
+            handle_nodes: scene.handles.iter().map(|h| h.nodes.clone()).collect(),
+            rest_angles,
+            mesh,
+            extra_pairs: Vec::new(),
+        }
+    }
+
+    /// Checks that a state read from a checkpoint fits `scene` and is a valid mesh (edges are
+    /// re-derived here).
+    pub fn fit(mut self, scene: &Scene) -> Result<SimState, SimError> {
+        let bad = |msg: String| SimError::Mesh(format!("checkpoint does not fit the scene: {msg}"));
+        if self.handle_nodes.len() != scene.handles.len() {
+            return Err(bad(format!("{} handles, the scene has {}", self.handle_nodes.len(), scene.handles.len())));
+        }
+        let n = self.mesh.nodes.len();
+        for (h, nodes) in scene.handles.iter().zip(&self.handle_nodes) {
+            if nodes.len() != h.nodes.len() || nodes.iter().any(|&k| k >= n) {
+                return Err(bad("handle nodes".into()));
+            }
+        }
+        if self.mesh.nodes.iter().any(|n| n.cloth as usize >= scene.cloths.len())
+            || self.mesh.faces.iter().any(|f| f.material as usize >= scene.materials.len())
+        {
+            return Err(bad("cloth or material index out of range".into()));
+        }
+        self.mesh.rebuild_topology().map_err(|e| bad(e.to_string()))?;
+        self.mesh.validate().map_err(|e| bad(e.to_string()))?;
+        if self.rest_angles.len() != self.mesh.edges.len() {
+            return Err(bad(format!("{} rest angles for {} edges", self.rest_angles.len(), self.mesh.edges.len())));
+        }
+        if self.extra_pairs.iter().any(|&(i, j)| i >= n || j >= i) {
+            return Err(bad("contact pattern pair out of range".into()));
+        }
+        Ok(self)
+    }
+}

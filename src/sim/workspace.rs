@@ -1,0 +1,147 @@
+//! The workspace of a run: everything derived from the scene and the state (rest data, the
+//! implicit system and its sparsity pattern, the collision world and its caches, node areas),
+//! and the per-frame tallies (stage timers, collision counters, remeshing and retries). It is
+//! rebuilt from (scene, state) by one function, for a fresh start and for a resume alike.
+
+use crate::collision::obstacle::ObstacleBody;
+use crate::collision::proximity::Contact;
+use crate::collision::world::{CollisionCounters, CollisionWorld};
+use crate::forces::RestState;
+use crate::math::Real;
+use crate::mesh::Mesh;
+use crate::remesh::RemeshStats;
+use crate::scene::Scene;
+use crate::solver::pattern::BlockPattern;
+use crate::solver::ImplicitSystem;
+
+use super::recover::FaultStats;
+use super::state::SimState;
+use super::timers::StageTimers;
+use super::SimError;
+
+pub struct Workspace {
+    /// Per face and hinge: rest data of the state's mesh and rest angles.
+    pub rest: RestState,
+    pub system: ImplicitSystem,
+    /// The pattern of a remeshed cloth, analysed only at the next step (`pattern_for_step`):
+    /// that step's self contacts usually extend it, and each analysis is a fill-reducing
+    /// ordering and a symbolic factorisation.
+    pub pending_pattern: Option<BlockPattern>,
+    /// Present when the scene has obstacles or self-collision.
+    pub collisions: Option<CollisionWorld>,
+    /// Per node: a third of the adjacent faces' material area (m²), scaling contact stiffness.
+    pub node_area: Vec<Real>,
+    /// Per-frame tallies, taken by the run for stats.json.
+    pub timers: StageTimers,
+    pub counters: CollisionCounters,
+    pub remesh_stats: RemeshStats,
+    pub faults: FaultStats,
+}
+
+impl Workspace {
+    /// The workspace of `state` in `scene`.
+    pub fn build(scene: &Scene, state: &SimState) -> Result<Workspace, SimError> {
+        let rest = rest_state(&state.mesh, &state.rest_angles)
+            .map_err(|f| SimError::Mesh(format!("face {f} is degenerate in material space")))?;
+        let system = ImplicitSystem::new(BlockPattern::new(&state.mesh, &rest.hinges, &state.extra_pairs))
+            .map_err(|source| SimError::Solve { step: state.steps, time: state.time, source })?;
+        let collisions = (!scene.obstacles.is_empty() || scene.collision.self_collision).then(|| {
+            let bodies = scene.obstacles.iter().map(ObstacleBody::new).collect();
+            CollisionWorld::new(scene.collision.clone(), bodies, state.time)
+        });
+        Ok(Workspace {
+            node_area: node_areas(&state.mesh, &rest),
+            rest,
+            system,
+            pending_pattern: None,
+            collisions,
+            timers: StageTimers::default(),
+            counters: CollisionCounters::default(),
+            remesh_stats: RemeshStats::default(),
+            faults: FaultStats::default(),
+        })
+    }
+
+    /// After a remesh: rest data and node areas of the new mesh, its pattern left for the next
+    /// step to analyse.
+    pub fn remeshed(&mut self, state: &SimState) -> Result<(), SimError> {
+        self.rest = rest_state(&state.mesh, &state.rest_angles)
+            .map_err(|f| SimError::Mesh(format!("remeshing left face {f} degenerate")))?;
+        self.node_area = node_areas(&state.mesh, &self.rest);
+        self.pending_pattern = Some(BlockPattern::new(&state.mesh, &self.rest.hinges, &[]));
+        Ok(())
+    }
+
+    /// Analyses a remeshed cloth's pending pattern, extended by this step's missing cloth–cloth
+    /// contact couplings. Otherwise the pattern stays fixed within the frame: a missing
+    /// coupling is only recorded in `extra_pairs` (assembly majorizes that contact on the
+    /// diagonal) and enters at the next frame start (`pattern_at_frame_start`), because in a
+    /// scene with self contact new pairs appear at most steps and each analysis is a
+    /// fill-reducing ordering and a symbolic factorisation.
+    pub fn pattern_for_step(&mut self, state: &mut SimState, contacts: &[Contact]) -> Result<(), SimError> {
+        let n = state.mesh.nodes.len();
+        let pattern = self.pending_pattern.as_ref().unwrap_or(&self.system.pattern);
+        let mut missing = Vec::new();
+        for c in contacts {
+            for a in 0..4 {
+                for b in 0..a {
+                    let (i, j) = (c.nodes[a], c.nodes[b]);
+                    if i < n && j < n && i != j && pattern.block(i.max(j), i.min(j)).is_none() {
+                        missing.push((i.max(j), i.min(j)));
+                    }
+                }
+            }
+        }
+        if !missing.is_empty() {
+            state.extra_pairs.extend(missing);
+            state.extra_pairs.sort_unstable();
+            state.extra_pairs.dedup();
+            if self.pending_pattern.is_some() {
+                self.pending_pattern = Some(BlockPattern::new(&state.mesh, &self.rest.hinges, &state.extra_pairs));
+            }
+        }
+        match self.pending_pattern.take() {
+            Some(pattern) => self.analyse(pattern, state),
+            None => Ok(()),
+        }
+    }
+
+    /// At a frame start without a remesh: analyses the pattern with the contact couplings
+    /// recorded during the previous frame. Done here rather than at the next step so that the
+    /// system at a frame boundary is the one a checkpoint rebuilds from `extra_pairs`. Returns
+    /// whether it analysed.
+    pub fn pattern_at_frame_start(&mut self, state: &SimState) -> Result<bool, SimError> {
+        let pattern = &self.system.pattern;
+        if self.pending_pattern.is_some() || state.extra_pairs.iter().all(|&(i, j)| pattern.block(i, j).is_some()) {
+            return Ok(false);
+        }
+        self.analyse(BlockPattern::new(&state.mesh, &self.rest.hinges, &state.extra_pairs), state)?;
+        Ok(true)
+    }
+
+    /// A new implicit system over `pattern`: fill-reducing ordering and symbolic factorisation.
+    fn analyse(&mut self, pattern: BlockPattern, state: &SimState) -> Result<(), SimError> {
+        self.system = ImplicitSystem::new(pattern).map_err(|source| SimError::Solve {
+            step: state.steps,
+            time: state.time,
+            source,
+        })?;
+        Ok(())
+    }
+}
+
+/// Rest data of `mesh`; the error is the first face degenerate in material space.
+fn rest_state(mesh: &Mesh, rest_angles: &[Real]) -> Result<RestState, usize> {
+    RestState::new(mesh, |e| rest_angles[e])
+}
+
+/// A third of the adjacent faces' material area per node (m²).
+fn node_areas(mesh: &Mesh, rest: &RestState) -> Vec<Real> {
+    let mut area = vec![0.0; mesh.nodes.len()];
+    for f in 0..mesh.faces.len() {
+        for n in mesh.face_nodes(f) {
+            area[n] += rest.membrane[f].area / 3.0;
+        }
+    }
+    area
+}
