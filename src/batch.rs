@@ -21,7 +21,8 @@ use std::sync::Mutex;
 use serde::{Deserialize, Serialize};
 
 use crate::camera::Camera;
-use crate::scene::{self, InputError, RemeshMode, Scene};
+use crate::error::InputError;
+use crate::scene::{self, RemeshMode, Scene};
 use crate::sim::{run_with_checkpoints, CheckpointOptions, RunOptions};
 
 #[derive(Deserialize)]

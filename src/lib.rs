@@ -9,6 +9,7 @@ pub mod batch;
 pub mod camera;
 pub mod collision;
 pub mod compare;
+pub mod error;
 pub mod forces;
 pub mod io;
 pub mod math;

@@ -7,8 +7,9 @@ use clap::{Parser, Subcommand};
 
 use viewcloth::camera::Camera;
 use viewcloth::compare::{compare, markdown, CompareOptions};
+use viewcloth::error::InputError;
 use viewcloth::render::{render_run, Colouring, RenderOptions};
-use viewcloth::scene::{self, InputError, RemeshMode, Scene};
+use viewcloth::scene::{self, RemeshMode, Scene};
 use viewcloth::sim::{resume, run_with_checkpoints, CheckpointOptions, ResumeOptions, RunError, RunOptions, SimError};
 
 #[derive(Parser)]

@@ -39,8 +39,8 @@ mod spline;
 
 use std::path::Path;
 
+use crate::error::InputError;
 use crate::math::{Real, Vec3};
-use crate::scene::InputError;
 use spec::Interpolation;
 
 /// One validated key; `up` is a unit vector not parallel to `target − position`.

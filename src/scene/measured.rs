@@ -9,7 +9,7 @@ use serde::Deserialize;
 
 use super::material::Material;
 use super::spec::MaterialSpec;
-use super::InputError;
+use crate::error::InputError;
 use crate::forces::data_driven::{MeasuredData, MeasuredMaterial};
 use crate::forces::membrane::MembraneStiffness;
 

@@ -24,27 +24,6 @@ use crate::sizing::{SizingParams, ViewParams};
 use material::Material;
 use motion::{Motion, Transform};
 
-/// A user-input error: the file, where in it (JSON path or line), and what was expected.
-/// Displayed as one line.
-#[derive(Debug, Clone, PartialEq)]
-pub struct InputError {
-    pub file: PathBuf,
-    pub location: Option<String>,
-    pub msg: String,
-}
-
-impl std::fmt::Display for InputError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let msg = self.msg.replace('\n', " ");
-        match &self.location {
-            Some(loc) => write!(f, "{}: {}: {}", self.file.display(), loc, msg),
-            None => write!(f, "{}: {}", self.file.display(), msg),
-        }
-    }
-}
-
-impl std::error::Error for InputError {}
-
 /// A cloth of the scene: its name and the range of nodes it owns in the combined mesh.
 #[derive(Clone, Debug)]
 pub struct Cloth {

@@ -13,12 +13,13 @@ pub use run::{resume, run, run_with_checkpoints, CheckpointOptions, ResumeOption
 use crate::collision::obstacle::ObstacleBody;
 use crate::collision::sdf::MeshSdf;
 use crate::collision::world::{CollisionCounters, CollisionWorld};
+use crate::error::InputError;
 use crate::forces::membrane::{deformation_gradient, max_principal_strain};
 use crate::forces::RestState;
 use crate::io::stats::FrameStats;
 use crate::math::Real;
 use crate::mesh::Mesh;
-use crate::scene::{InputError, RemeshMode, Scene};
+use crate::scene::{RemeshMode, Scene};
 use crate::solver::pattern::BlockPattern;
 use crate::solver::{ImplicitSystem, SolveError};
 use timers::StageTimers;

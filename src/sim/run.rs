@@ -8,10 +8,11 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use crate::camera::Camera;
+use crate::error::InputError;
 use crate::io::obj::{frame_obj, obstacle_obj};
 use crate::io::stats::{CollisionFrameStats, RemeshFrameStats, RunStats};
 use crate::io::write_atomic;
-use crate::scene::{self, InputError, RemeshMode, Scene};
+use crate::scene::{self, RemeshMode, Scene};
 
 use super::checkpoint::{self, CheckpointError, RunRecord};
 use super::{SimError, Simulation};

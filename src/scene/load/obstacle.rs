@@ -4,9 +4,10 @@
 use std::path::{Path, PathBuf};
 
 use super::{format_frame, mesh_file, motion_or_mot, non_negative, positive, transform, Ctx, Res};
+use crate::error::InputError;
 use crate::io::obj::{read_obj, ObjData};
 use crate::scene::spec::{ObstacleSpec, SequenceSpec};
-use crate::scene::{InputError, MeshSequence, Obstacle, ObstacleShape};
+use crate::scene::{MeshSequence, Obstacle, ObstacleShape};
 
 const ONE_SHAPE: &str = "expected exactly one shape: mesh, sphere, plane, box, capsule or sequence";
 
