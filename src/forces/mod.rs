@@ -3,6 +3,7 @@
 
 pub mod bending;
 pub mod data_driven;
+pub mod material;
 pub mod membrane;
 pub mod wind;
 

@@ -16,12 +16,12 @@ pub use measured::read_measured;
 use std::path::PathBuf;
 
 use crate::camera::Camera;
+use crate::forces::material::Material;
 use crate::forces::wind::Wind;
 use crate::io::obj::ObjData;
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
 use crate::sizing::{SizingParams, ViewParams};
-use material::Material;
 use motion::{Motion, Transform};
 
 /// A cloth of the scene: its name and the range of nodes it owns in the combined mesh.
