@@ -8,6 +8,7 @@ pub mod friction;
 pub mod geometry;
 pub mod impact_zones;
 pub mod obstacle;
+pub mod params;
 pub mod proximity;
 pub mod sdf;
 pub mod world;

@@ -16,6 +16,7 @@ pub use measured::read_measured;
 use std::path::PathBuf;
 
 use crate::camera::Camera;
+use crate::collision::params::CollisionParams;
 use crate::forces::material::Material;
 use crate::forces::wind::Wind;
 use crate::io::obj::ObjData;
@@ -192,34 +193,6 @@ fn transform_at(transform: &Transform, motion: Option<&Motion>, t: Real) -> Tran
     match motion {
         Some(m) => m.eval(t).compose(transform),
         None => *transform,
-    }
-}
-
-/// Collision parameters (scene `collision` block, with defaults).
-#[derive(Clone, Debug, PartialEq)]
-pub struct CollisionParams {
-    /// Repulsion thickness (m).
-    pub thickness: Real,
-    /// Repulsion stiffness per unit area (N/m³).
-    pub stiffness: Real,
-    pub friction: Real,
-    pub self_friction: Real,
-    pub self_collision: bool,
-    pub max_iterations: usize,
-    pub push_out_tolerance: Real,
-}
-
-impl Default for CollisionParams {
-    fn default() -> Self {
-        CollisionParams {
-            thickness: 5e-3,
-            stiffness: 1e6,
-            friction: 0.3,
-            self_friction: 0.3,
-            self_collision: true,
-            max_iterations: 100,
-            push_out_tolerance: 15e-3,
-        }
     }
 }
 
