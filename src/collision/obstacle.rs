@@ -13,8 +13,8 @@
 
 use std::collections::HashMap;
 
+use crate::math::motion::{Motion, Transform};
 use crate::math::{Real, Vec3};
-use crate::scene::motion::{Motion, Transform};
 use crate::scene::{MeshSequence, Obstacle, ObstacleShape};
 
 /// Largest chordal error of a meshed sphere or capsule, relative to its radius.
@@ -324,7 +324,7 @@ pub fn capsule_mesh(radius: Real, length: Real, tol: Real) -> (Vec<Vec3>, Vec<[u
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::motion::Keyframe;
+    use crate::math::motion::Keyframe;
     use std::f64::consts::PI;
 
     /// Every edge is shared by exactly two faces that traverse it in opposite directions.

@@ -75,5 +75,6 @@ mod tests {
 }
 
 pub mod dual;
+pub mod motion;
 #[cfg(test)]
 pub(crate) mod test_rng;

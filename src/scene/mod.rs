@@ -6,7 +6,6 @@ mod load;
 pub mod material;
 mod measured;
 pub mod mot;
-pub mod motion;
 pub mod spec;
 
 pub use arcsim::{load_path, Loaded};
@@ -20,10 +19,10 @@ use crate::collision::params::CollisionParams;
 use crate::forces::material::Material;
 use crate::forces::wind::Wind;
 use crate::io::obj::ObjData;
+use crate::math::motion::{Motion, Transform};
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
 use crate::sizing::{SizingParams, ViewParams};
-use motion::{Motion, Transform};
 
 /// A cloth of the scene: its name and the range of nodes it owns in the combined mesh.
 #[derive(Clone, Debug)]

@@ -4,7 +4,6 @@
 use std::path::{Path, PathBuf};
 
 use super::material::resolve;
-use super::motion::{KeyVelocity, Keyframe, Motion, Transform};
 use super::spec::{ClothSpec, CollisionSpec, HandleSpec, KeyframeSpec, MotSpec, SceneSpec, TransformSpec};
 use super::{Cloth, FollowObstacle, Handle, Obstacle, ObstacleShape, Scene};
 use crate::camera::Camera;
@@ -12,6 +11,7 @@ use crate::collision::params::CollisionParams;
 use crate::error::InputError;
 use crate::forces::wind::Wind;
 use crate::io::obj::{read_obj, ObjData};
+use crate::math::motion::{KeyVelocity, Keyframe, Motion, Transform};
 use crate::math::{cross2, Vec2, Vec3};
 use crate::mesh::{rectangle, Face, Mesh, MeshError, Node, NodeId, Vert, VertId};
 

@@ -9,7 +9,7 @@ use serde_json::{Map, Value};
 use super::ordered::{nums, obj, J};
 use super::Res;
 use crate::error::InputError;
-use crate::scene::motion::{KeyVelocity, Keyframe, Motion, Transform};
+use crate::math::motion::{KeyVelocity, Keyframe, Motion, Transform};
 
 mod cloth;
 
