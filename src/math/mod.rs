@@ -76,5 +76,6 @@ mod tests {
 
 pub mod dual;
 pub mod motion;
+pub mod spline;
 #[cfg(test)]
 pub(crate) mod test_rng;

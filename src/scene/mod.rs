@@ -19,7 +19,7 @@ use crate::collision::params::CollisionParams;
 use crate::forces::material::Material;
 use crate::forces::wind::Wind;
 use crate::io::obj::ObjData;
-use crate::math::motion::{Motion, Transform};
+use crate::math::motion::{transform_at, Motion, Transform};
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
 use crate::sizing::{SizingParams, ViewParams};
@@ -185,13 +185,6 @@ impl Obstacle {
     /// The local-to-world transform at `t`: `motion(t) ∘ transform`.
     pub fn transform_at(&self, t: Real) -> Transform {
         transform_at(&self.transform, self.motion.as_ref(), t)
-    }
-}
-
-fn transform_at(transform: &Transform, motion: Option<&Motion>, t: Real) -> Transform {
-    match motion {
-        Some(m) => m.eval(t).compose(transform),
-        None => *transform,
     }
 }
 
