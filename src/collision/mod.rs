@@ -11,4 +11,5 @@ pub mod obstacle;
 pub mod params;
 pub mod proximity;
 pub mod sdf;
+pub mod shape;
 pub mod world;

@@ -16,9 +16,9 @@ use std::path::PathBuf;
 
 use crate::camera::Camera;
 use crate::collision::params::CollisionParams;
+use crate::collision::shape::Obstacle;
 use crate::forces::material::Material;
 use crate::forces::wind::Wind;
-use crate::io::obj::ObjData;
 use crate::math::motion::{transform_at, Motion, Transform};
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
@@ -138,53 +138,6 @@ impl Handle {
             (None, Some(m)) => m.eval(t).apply(&self.anchors[k]),
             (None, None) => self.anchors[k],
         }
-    }
-}
-
-/// An obstacle's shape, as given in the scene.
-#[derive(Clone, Debug)]
-pub enum ObstacleShape {
-    Mesh(ObjData),
-    Sphere {
-        radius: Real,
-    },
-    Plane {
-        size: [Real; 2],
-    },
-    Box {
-        size: [Real; 3],
-    },
-    Capsule {
-        radius: Real,
-        length: Real,
-    },
-    /// A deforming mesh given as one OBJ per frame.
-    Sequence(MeshSequence),
-}
-
-/// A per-frame OBJ sequence of one topology: `frames[k]` holds the local vertex positions at
-/// time `start_time + k / fps` (`frames[0]` equals `mesh.positions`).
-#[derive(Clone, Debug)]
-pub struct MeshSequence {
-    /// The first file: faces (shared by every frame) and the positions of frame 0.
-    pub mesh: ObjData,
-    pub frames: Vec<Vec<Vec3>>,
-    pub start_time: Real,
-    pub fps: Real,
-}
-
-#[derive(Clone, Debug)]
-pub struct Obstacle {
-    pub name: String,
-    pub shape: ObstacleShape,
-    pub transform: Transform,
-    pub motion: Option<Motion>,
-}
-
-impl Obstacle {
-    /// The local-to-world transform at `t`: `motion(t) ∘ transform`.
-    pub fn transform_at(&self, t: Real) -> Transform {
-        transform_at(&self.transform, self.motion.as_ref(), t)
     }
 }
 

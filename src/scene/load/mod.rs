@@ -5,9 +5,10 @@ use std::path::{Path, PathBuf};
 
 use super::material::resolve;
 use super::spec::{ClothSpec, CollisionSpec, HandleSpec, KeyframeSpec, MotSpec, SceneSpec, TransformSpec};
-use super::{Cloth, FollowObstacle, Handle, Obstacle, ObstacleShape, Scene};
+use super::{Cloth, FollowObstacle, Handle, Scene};
 use crate::camera::Camera;
 use crate::collision::params::CollisionParams;
+use crate::collision::shape::{Obstacle, ObstacleShape};
 use crate::error::InputError;
 use crate::forces::wind::Wind;
 use crate::io::obj::{read_obj, ObjData};
