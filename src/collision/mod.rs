@@ -1,5 +1,6 @@
-//! Obstacles and collisions: broad phase, proximity repulsion, continuous collision detection
-//! and impact-zone resolution.
+//! Obstacles and collisions: obstacle descriptions (`shape`) and the bodies meshed from them
+//! (`obstacle`), broad phase, proximity repulsion, continuous collision detection and impact-zone
+//! resolution, with their parameters (`params`).
 
 pub mod broad;
 pub mod bvh;

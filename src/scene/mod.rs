@@ -1,5 +1,10 @@
 //! Scenes: the file format (`spec`), its validation and assembly into a runnable `Scene`
-//! (`load`), fabrics (`material`) and keyframed motion (`motion`).
+//! (`load`), fabric presets and material blocks (`material`), measured fabric files (`measured`),
+//! `.mot` motion files (`mot`) and ARCSim configurations (`arcsim`).
+//!
+//! A `Scene` is assembled out of the stages' own types: fabrics (`forces::material`), obstacles
+//! and collision parameters (`collision::shape`, `collision::params`), motions (`math::motion`)
+//! and the camera. None of those modules imports `scene`.
 
 pub mod arcsim;
 mod load;
