@@ -20,7 +20,8 @@ use std::sync::Mutex;
 
 use serde::{Deserialize, Serialize};
 
-use crate::scene::{InputError, RemeshMode};
+use crate::error::InputError;
+use crate::scene::RemeshMode;
 use crate::shot::{self, ShotRequest};
 use crate::sim::{run_with_checkpoints, CheckpointOptions, RunOptions};
 

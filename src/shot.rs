@@ -6,7 +6,8 @@
 use std::path::{Path, PathBuf};
 
 use crate::camera::Camera;
-use crate::scene::{self, InputError, RemeshMode, Scene};
+use crate::error::InputError;
+use crate::scene::{self, RemeshMode, Scene};
 
 /// What the user asked for.
 #[derive(Clone, Debug, Default)]

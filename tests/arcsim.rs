@@ -239,7 +239,7 @@ fn mot_bodies_follow_their_frames_and_the_conf_transform() {
     assert!(mot.bodies.iter().all(|b| b.len() == 716));
     let dress = scene::load_path(&dir.join("conf/dress-blue.json"), None).unwrap().scene;
     // motions.transform: translate (0, 0, −1), rotate −90° about z, applied after the body's own.
-    let after = scene::motion::Transform::new([0.0, 0.0, -1.0], Some([-90.0, 0.0, 0.0, 1.0]), 1.0);
+    let after = viewcloth::math::motion::Transform::new([0.0, 0.0, -1.0], Some([-90.0, 0.0, 0.0, 1.0]), 1.0);
     for (b, frame) in [(0, 0), (3, 100), (15, 715), (7, 333)] {
         let expected = after.compose(&mot.bodies[b][frame]);
         let got = dress.obstacles[b].transform_at(frame as Real / 30.0);

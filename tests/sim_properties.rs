@@ -132,7 +132,7 @@ fn keyframed_handle_follows_its_motion_exactly() {
     }
     assert!(farthest > 0.1, "the keyframed handle barely moved ({farthest} m)");
     // After the last key the motion holds the last key's transform.
-    let last = viewcloth::scene::motion::Transform::new([0.1, -0.1, 0.0], Some([30.0, 0.0, 0.0, 1.0]), 1.0);
+    let last = viewcloth::math::motion::Transform::new([0.1, -0.1, 0.0], Some([30.0, 0.0, 0.0, 1.0]), 1.0);
     let expected = last.apply(&x0);
     let got = sim.state.mesh.nodes[moving].x;
     assert!((got - expected).norm() < 1e-12, "after the last keyframe the handle is at {got:?}, expected {expected:?}");

@@ -5,8 +5,8 @@ use std::path::Path;
 
 use super::spec::{CameraSpec, KeySpec};
 use super::{Camera, Key};
+use crate::error::InputError;
 use crate::math::{Real, Vec3};
-use crate::scene::InputError;
 
 type Res<T> = Result<T, InputError>;
 

@@ -22,8 +22,8 @@
 //!   0.05 and 100).
 //! - `interpolation`: `"catmull-rom"` (default) or `"linear"`, per component of position, target,
 //!   up and fov. Catmull–Rom is the cubic Hermite spline with tangents (x[i+1] − x[i−1]) /
-//!   (t[i+1] − t[i−1]) at interior keys and zero at the first and last key, as the scene's
-//!   keyframed motions.
+//!   (t[i+1] − t[i−1]) at interior keys and zero at the first and last key: the spline of
+//!   `math::spline`, shared with the scene's keyframed motions.
 //! - `keys` (required, at least one; one key is a static camera): `time` (s, strictly
 //!   increasing), `position` (the eye) and `target` (m, at least 1e-9 m apart), `up` (a direction
 //!   not parallel to target − position, default [0, 0, 1]; only its direction matters), `fov` (the
@@ -35,12 +35,12 @@
 
 mod load;
 mod spec;
-mod spline;
 
 use std::path::Path;
 
+use crate::error::InputError;
+use crate::math::spline::{self, Segment, Weights};
 use crate::math::{Real, Vec3};
-use crate::scene::InputError;
 use spec::Interpolation;
 
 /// One validated key; `up` is a unit vector not parallel to `target − position`.
@@ -110,7 +110,7 @@ impl Camera {
     /// The camera at time `t` (s): interpolated between keys, holding the first/last key outside
     /// their range.
     pub fn view_at(&self, t: Real) -> View {
-        let (weights, nearest) = spline::weights_at(&self.times, t, self.interpolation);
+        let (weights, nearest) = self.weights_at(t);
         let mix =
             |get: fn(&Key) -> Vec3| weights.iter().fold(Vec3::zeros(), |acc, &(k, w)| acc + get(&self.keys[k]) * w);
         let eye = mix(|k| k.position);
@@ -133,6 +133,21 @@ impl Camera {
             aspect: self.aspect,
             near: self.near,
             far: self.far,
+        }
+    }
+
+    /// The spline's weights on the keys at time `t`, and the key nearest in time (the fallback
+    /// for degenerate interpolated frames).
+    fn weights_at(&self, t: Real) -> (Weights, usize) {
+        match spline::locate(&self.times, |&tk| tk, t) {
+            Segment::Hold(k) => (spline::hold_weights(k), k),
+            Segment::Between { i, s } => {
+                let weights = match self.interpolation {
+                    Interpolation::Linear => spline::linear_weights(i, s),
+                    Interpolation::CatmullRom => spline::catmull_rom_weights(&self.times, i, s),
+                };
+                (weights, if s < 0.5 { i } else { i + 1 })
+            }
         }
     }
 

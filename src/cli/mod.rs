@@ -8,8 +8,9 @@ use std::path::{Path, PathBuf};
 
 use crate::camera::Camera;
 use crate::compare::{compare, markdown, CompareOptions};
+use crate::error::InputError;
 use crate::render::{render_run, Colouring, RenderOptions};
-use crate::scene::{self, InputError, RemeshMode};
+use crate::scene::{self, RemeshMode};
 use crate::shot::{self, ShotError, ShotRequest};
 use crate::sim::{resume, run_with_checkpoints, CheckpointOptions, ResumeOptions, RunError, RunOptions, SimError};
 use args::{CompareArgs, RenderArgs, ResumeArgs, SimulateArgs};

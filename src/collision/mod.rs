@@ -1,5 +1,6 @@
-//! Obstacles and collisions: broad phase, proximity repulsion, continuous collision detection
-//! and impact-zone resolution.
+//! Obstacles and collisions: obstacle descriptions (`shape`) and the bodies meshed from them
+//! (`obstacle`), broad phase, proximity repulsion, continuous collision detection and impact-zone
+//! resolution, with their parameters (`params`).
 
 pub mod broad;
 pub mod bvh;
@@ -8,6 +9,8 @@ pub mod friction;
 pub mod geometry;
 pub mod impact_zones;
 pub mod obstacle;
+pub mod params;
 pub mod proximity;
 pub mod sdf;
+pub mod shape;
 pub mod world;

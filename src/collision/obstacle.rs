@@ -13,9 +13,9 @@
 
 use std::collections::HashMap;
 
+use super::shape::{MeshSequence, Obstacle, ObstacleShape};
+use crate::math::motion::{Motion, Transform};
 use crate::math::{Real, Vec3};
-use crate::scene::motion::{Motion, Transform};
-use crate::scene::{MeshSequence, Obstacle, ObstacleShape};
 
 /// Largest chordal error of a meshed sphere or capsule, relative to its radius.
 pub const CHORDAL_TOLERANCE: Real = 0.005;
@@ -324,7 +324,7 @@ pub fn capsule_mesh(radius: Real, length: Real, tol: Real) -> (Vec<Vec3>, Vec<[u
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::motion::Keyframe;
+    use crate::math::motion::Keyframe;
     use std::f64::consts::PI;
 
     /// Every edge is shared by exactly two faces that traverse it in opposite directions.
@@ -477,46 +477,5 @@ mod tests {
         assert_eq!(body.positions_at(0.0), frames[0]);
         assert_eq!(body.positions_at(0.8), frames[2]);
         assert_eq!(body.positions_at(9.0), frames[2]);
-    }
-
-    /// Writes `frames` as `dir/body_000k.obj` (a tetrahedron scaled per frame; frame `bad` gets
-    /// an extra vertex) and a scene naming them as a sequence.
-    fn write_sequence(dir: &std::path::Path, frames: usize, bad: Option<usize>) -> String {
-        std::fs::create_dir_all(dir.join("meshes")).unwrap();
-        for k in 0..frames {
-            let s = 1.0 + k as Real;
-            let mut obj = format!("v 0 0 0\nv {s} 0 0\nv 0 {s} 0\nv 0 0 {s}\n");
-            if bad == Some(k) {
-                obj.push_str("v 9 9 9\n");
-            }
-            obj.push_str("f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
-            std::fs::write(dir.join(format!("meshes/body_{:04}.obj", 3 + k)), obj).unwrap();
-        }
-        format!(
-            r#"{{"version": 1, "frame_time": 0.04, "frames": 1,
-                "cloths": [{{"rectangle": {{"width": 1, "height": 1, "resolution": [2, 2]}},
-                             "material": {{"preset": "cotton"}}}}],
-                "obstacles": [{{"name": "body", "sequence":
-                    {{"pattern": "meshes/body_%04d.obj", "first": 3, "count": {frames},
-                      "fps": 25}}}}]}}"#
-        )
-    }
-
-    #[test]
-    fn sequence_scene_loads_and_rejects_a_mismatched_frame() {
-        let dir = std::env::temp_dir().join(format!("viewcloth_seq_{}", std::process::id()));
-        let text = write_sequence(&dir, 2, None);
-        let file = dir.join("scene.json");
-        let scene = crate::scene::load_str(&text, &file, &dir, "seq").unwrap();
-        let body = ObstacleBody::new(&scene.obstacles[0]);
-        let half = body.positions_at(0.02);
-        assert!((half[1] - Vec3::new(1.5, 0.0, 0.0)).norm() < 1e-12);
-        assert!(signed_volume(body.triangles(), &half) > 0.0);
-
-        let text = write_sequence(&dir, 3, Some(2));
-        let err = crate::scene::load_str(&text, &file, &dir, "seq").unwrap_err();
-        assert!(err.file.ends_with("meshes/body_0005.obj"), "{err}");
-        assert!(err.msg.contains("5 vertices, expected 4"), "{err}");
-        std::fs::remove_dir_all(&dir).ok();
     }
 }

@@ -9,10 +9,10 @@ use super::ccd::{edge_edge_ccd, vertex_face_ccd, Impact, CCD_TOLERANCE};
 use super::geometry::closest_point_triangle;
 use super::impact_zones::{resolve_zone, ZoneConstraint, ZoneState};
 use super::obstacle::ObstacleBody;
+use super::params::CollisionParams;
 use super::proximity::{edge_edge_contact, node_face_contact, obstacle_edge_contact, obstacle_vertex_contact, Contact};
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
-use crate::scene::CollisionParams;
 
 /// Separation the impact-zone projection enforces, as a fraction of the thickness.
 const ZONE_SEPARATION: Real = 0.1;

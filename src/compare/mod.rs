@@ -19,13 +19,14 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use crate::camera::Camera;
+use crate::error::InputError;
 use crate::io::obj::read_obj;
 use crate::io::stats::RunStats;
 use crate::math::{Real, Vec3};
 use crate::metrics::{rasterize, surface_distance, visible_error, visible_triangles, Surface};
 use crate::metrics::{SurfaceDistance, VisibleError};
 use crate::render::run_dir::{self, RunFiles};
-use crate::scene::{InputError, RemeshMode, Scene};
+use crate::scene::{RemeshMode, Scene};
 use crate::sim::{run, RunError, RunOptions};
 
 pub use report::{markdown, svg_plot};

@@ -1,8 +1,10 @@
 //! Element force kernels: pure functions from element state to (energy, gradient, Hessian).
-//! Scattering into the global system happens in `solver::assembly`.
+//! Scattering into the global system happens in `solver::assembly`. A fabric
+//! (`material::Material`) picks the membrane and bending kernels of its faces and hinges.
 
 pub mod bending;
 pub mod data_driven;
+pub mod material;
 pub mod membrane;
 pub mod wind;
 

@@ -1,4 +1,5 @@
-//! Scalar type and the small fixed-size linear algebra used by element kernels.
+//! Scalar type and the small fixed-size linear algebra used by element kernels; rigid transforms
+//! and keyframed motions (`motion`) and the spline they share with camera paths (`spline`).
 //!
 //! nalgebra for element-sized blocks; the global sparse system lives in `solver` (faer).
 
@@ -75,5 +76,7 @@ mod tests {
 }
 
 pub mod dual;
+pub mod motion;
+pub mod spline;
 #[cfg(test)]
 pub(crate) mod test_rng;

@@ -21,10 +21,10 @@ use std::path::{Path, PathBuf};
 use rayon::prelude::*;
 
 use crate::camera::{Camera, View};
+use crate::error::InputError;
 use crate::io::write_atomic;
 use crate::math::{Real, Vec3};
 use crate::metrics::rasterize;
-use crate::scene::InputError;
 use crate::sizing::view::{triangle_view_factor, ViewParams};
 
 pub use run_dir::{read_stats, select_frames, FrameMeshes, RunFiles};

@@ -8,10 +8,10 @@
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
+use crate::error::InputError;
 use crate::io::obj::read_obj;
 use crate::io::stats::RunStats;
 use crate::math::{Real, Vec3};
-use crate::scene::InputError;
 
 /// One frame's surfaces, rasterised together: the cloth's triangles first, then the obstacles'.
 #[derive(Clone, Debug, Default)]

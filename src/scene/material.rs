@@ -1,47 +1,10 @@
-//! Resolved fabric parameters and the named presets.
+//! Named fabric presets, and the resolution of a scene's material block into a `Material`.
 
-use std::sync::Arc;
-
-use crate::forces::bending::bending;
-use crate::forces::data_driven::{measured_bending, measured_membrane, MeasuredMaterial};
-use crate::forces::membrane::{membrane, MembraneRest, MembraneStiffness};
-use crate::forces::{Hinge, Projection};
-use crate::math::{Mat12, Mat9, Real, Vec12, Vec3, Vec9};
+use crate::forces::material::Material;
+use crate::forces::membrane::MembraneStiffness;
+use crate::math::Real;
 
 use super::spec::MaterialSpec;
-
-/// A fabric, in SI units.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Material {
-    /// Areal density (kg/m²).
-    pub density: Real,
-    pub membrane: MembraneStiffness,
-    /// Bending stiffness (N·m).
-    pub bending: Real,
-    /// Stiffness-proportional damping coefficient α (s): f_d = −α K v.
-    pub damping: Real,
-    /// Measured stretching and bending (Wang et al. 2011); when present it replaces `membrane`
-    /// and `bending`.
-    pub measured: Option<Arc<MeasuredMaterial>>,
-}
-
-impl Material {
-    /// The membrane kernel of this fabric for one face.
-    pub fn stretch(&self, x: &[Vec3; 3], rest: &MembraneRest, proj: Projection) -> (Real, Vec9, Mat9) {
-        match &self.measured {
-            Some(m) => measured_membrane(x, rest, &m.stretching, proj),
-            None => membrane(x, rest, &self.membrane, proj),
-        }
-    }
-
-    /// The bending kernel of this fabric for one hinge.
-    pub fn bend(&self, x: &[Vec3; 4], hinge: &Hinge, proj: Projection) -> (Real, Vec12, Mat12) {
-        match &self.measured {
-            Some(m) => measured_bending(x, &hinge.rest, &hinge.measured, &m.bending, proj),
-            None => bending(x, &hinge.rest, self.bending, proj),
-        }
-    }
-}
 
 /// Named presets. Areal densities are typical fabric weights (cotton shirting ≈ 150 g/m²,
 /// 11 oz denim ≈ 390 g/m², silk crêpe ≈ 60 g/m², cotton jersey ≈ 180 g/m²). Membrane stiffnesses

@@ -7,10 +7,10 @@ use std::sync::Arc;
 
 use serde::Deserialize;
 
-use super::material::Material;
 use super::spec::MaterialSpec;
-use super::InputError;
+use crate::error::InputError;
 use crate::forces::data_driven::{MeasuredData, MeasuredMaterial};
+use crate::forces::material::Material;
 use crate::forces::membrane::MembraneStiffness;
 
 #[derive(Deserialize)]

@@ -1,12 +1,16 @@
 //! Scenes: the file format (`spec`), its validation and assembly into a runnable `Scene`
-//! (`load`), fabrics (`material`) and keyframed motion (`motion`).
+//! (`load`), fabric presets and material blocks (`material`), measured fabric files (`measured`),
+//! `.mot` motion files (`mot`) and ARCSim configurations (`arcsim`).
+//!
+//! A `Scene` is assembled out of the stages' own types: fabrics (`forces::material`), obstacles
+//! and collision parameters (`collision::shape`, `collision::params`), motions (`math::motion`)
+//! and the camera. None of those modules imports `scene`.
 
 pub mod arcsim;
 mod load;
 pub mod material;
 mod measured;
 pub mod mot;
-pub mod motion;
 pub mod spec;
 
 pub use arcsim::{load_path, Loaded};
@@ -16,34 +20,15 @@ pub use measured::read_measured;
 use std::path::PathBuf;
 
 use crate::camera::Camera;
+use crate::collision::params::CollisionParams;
+use crate::collision::shape::Obstacle;
+use crate::error::InputError;
+use crate::forces::material::Material;
 use crate::forces::wind::Wind;
-use crate::io::obj::ObjData;
+use crate::math::motion::{transform_at, Motion, Transform};
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
 use crate::sizing::{SizingParams, ViewParams};
-use material::Material;
-use motion::{Motion, Transform};
-
-/// A user-input error: the file, where in it (JSON path or line), and what was expected.
-/// Displayed as one line.
-#[derive(Debug, Clone, PartialEq)]
-pub struct InputError {
-    pub file: PathBuf,
-    pub location: Option<String>,
-    pub msg: String,
-}
-
-impl std::fmt::Display for InputError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let msg = self.msg.replace('\n', " ");
-        match &self.location {
-            Some(loc) => write!(f, "{}: {}: {}", self.file.display(), loc, msg),
-            None => write!(f, "{}: {}", self.file.display(), msg),
-        }
-    }
-}
-
-impl std::error::Error for InputError {}
 
 /// A cloth of the scene: its name and the range of nodes it owns in the combined mesh.
 #[derive(Clone, Debug)]
@@ -158,88 +143,6 @@ impl Handle {
             (Some(f), _) => f.displacement(t).apply(&self.anchors[k]),
             (None, Some(m)) => m.eval(t).apply(&self.anchors[k]),
             (None, None) => self.anchors[k],
-        }
-    }
-}
-
-/// An obstacle's shape, as given in the scene.
-#[derive(Clone, Debug)]
-pub enum ObstacleShape {
-    Mesh(ObjData),
-    Sphere {
-        radius: Real,
-    },
-    Plane {
-        size: [Real; 2],
-    },
-    Box {
-        size: [Real; 3],
-    },
-    Capsule {
-        radius: Real,
-        length: Real,
-    },
-    /// A deforming mesh given as one OBJ per frame.
-    Sequence(MeshSequence),
-}
-
-/// A per-frame OBJ sequence of one topology: `frames[k]` holds the local vertex positions at
-/// time `start_time + k / fps` (`frames[0]` equals `mesh.positions`).
-#[derive(Clone, Debug)]
-pub struct MeshSequence {
-    /// The first file: faces (shared by every frame) and the positions of frame 0.
-    pub mesh: ObjData,
-    pub frames: Vec<Vec<Vec3>>,
-    pub start_time: Real,
-    pub fps: Real,
-}
-
-#[derive(Clone, Debug)]
-pub struct Obstacle {
-    pub name: String,
-    pub shape: ObstacleShape,
-    pub transform: Transform,
-    pub motion: Option<Motion>,
-}
-
-impl Obstacle {
-    /// The local-to-world transform at `t`: `motion(t) ∘ transform`.
-    pub fn transform_at(&self, t: Real) -> Transform {
-        transform_at(&self.transform, self.motion.as_ref(), t)
-    }
-}
-
-fn transform_at(transform: &Transform, motion: Option<&Motion>, t: Real) -> Transform {
-    match motion {
-        Some(m) => m.eval(t).compose(transform),
-        None => *transform,
-    }
-}
-
-/// Collision parameters (scene `collision` block, with defaults).
-#[derive(Clone, Debug, PartialEq)]
-pub struct CollisionParams {
-    /// Repulsion thickness (m).
-    pub thickness: Real,
-    /// Repulsion stiffness per unit area (N/m³).
-    pub stiffness: Real,
-    pub friction: Real,
-    pub self_friction: Real,
-    pub self_collision: bool,
-    pub max_iterations: usize,
-    pub push_out_tolerance: Real,
-}
-
-impl Default for CollisionParams {
-    fn default() -> Self {
-        CollisionParams {
-            thickness: 5e-3,
-            stiffness: 1e6,
-            friction: 0.3,
-            self_friction: 0.3,
-            self_collision: true,
-            max_iterations: 100,
-            push_out_tolerance: 15e-3,
         }
     }
 }

@@ -11,8 +11,8 @@ use std::path::Path;
 
 use nalgebra::{Quaternion, UnitQuaternion};
 
-use super::motion::{Keyframe, Motion, Transform};
-use super::InputError;
+use crate::error::InputError;
+use crate::math::motion::{Keyframe, Motion, Transform};
 use crate::math::{Real, Vec3};
 
 /// The frames of every body of a `.mot` file.

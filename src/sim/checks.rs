@@ -35,12 +35,12 @@
 use rayon::prelude::*;
 
 use crate::collision::proximity::Contact;
+use crate::forces::material::Material;
 use crate::forces::membrane::{deformation_gradient, max_principal_strain};
 use crate::forces::wind::{wind_face, Wind};
 use crate::forces::{Projection, RestState};
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
-use crate::scene::material::Material;
 
 use super::recover::Fault;
 

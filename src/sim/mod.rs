@@ -19,11 +19,12 @@ pub use workspace::Workspace;
 
 use crate::collision::sdf::MeshSdf;
 use crate::collision::world::CollisionWorld;
+use crate::error::InputError;
 use crate::forces::membrane::{deformation_gradient, max_principal_strain};
 use crate::io::stats::FrameStats;
 use crate::math::Real;
 use crate::mesh::Mesh;
-use crate::scene::{InputError, RemeshMode, Scene};
+use crate::scene::{RemeshMode, Scene};
 use crate::solver::SolveError;
 use checks::Elastic;
 

@@ -7,10 +7,11 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use crate::error::InputError;
 use crate::io::obj::{frame_obj, obstacle_obj};
 use crate::io::stats::{CollisionFrameStats, RemeshFrameStats, RunStats};
 use crate::io::write_atomic;
-use crate::scene::{InputError, RemeshMode, Scene};
+use crate::scene::{RemeshMode, Scene};
 use crate::shot::{self, ShotRequest};
 
 use super::checkpoint::{self, CheckpointError, RunRecord};

@@ -6,11 +6,11 @@
 use rayon::prelude::*;
 
 use crate::collision::proximity::{repulsion, Contact};
+use crate::forces::material::Material;
 use crate::forces::wind::{wind_face, Wind};
 use crate::forces::{Projection, RestState};
 use crate::math::{Mat12, Mat3, Real, Vec12, Vec3, Vec9};
 use crate::mesh::Mesh;
-use crate::scene::material::Material;
 
 use super::pattern::NONE;
 use super::{ImplicitSystem, SolveError};

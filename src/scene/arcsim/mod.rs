@@ -16,7 +16,8 @@ use std::path::{Path, PathBuf};
 
 use serde_json::Value;
 
-use super::{InputError, Scene};
+use super::Scene;
+use crate::error::InputError;
 
 mod convert;
 mod ordered;

@@ -4,12 +4,15 @@
 use std::path::{Path, PathBuf};
 
 use super::material::resolve;
-use super::motion::{KeyVelocity, Keyframe, Motion, Transform};
 use super::spec::{ClothSpec, CollisionSpec, HandleSpec, KeyframeSpec, MotSpec, SceneSpec, TransformSpec};
-use super::{Cloth, CollisionParams, FollowObstacle, Handle, InputError, Obstacle, ObstacleShape, Scene};
+use super::{Cloth, FollowObstacle, Handle, Scene};
 use crate::camera::Camera;
+use crate::collision::params::CollisionParams;
+use crate::collision::shape::{Obstacle, ObstacleShape};
+use crate::error::InputError;
 use crate::forces::wind::Wind;
 use crate::io::obj::{read_obj, ObjData};
+use crate::math::motion::{KeyVelocity, Keyframe, Motion, Transform};
 use crate::math::{cross2, Vec2, Vec3};
 use crate::mesh::{rectangle, Face, Mesh, MeshError, Node, NodeId, Vert, VertId};
 

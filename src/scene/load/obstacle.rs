@@ -4,9 +4,10 @@
 use std::path::{Path, PathBuf};
 
 use super::{format_frame, mesh_file, motion_or_mot, non_negative, positive, transform, Ctx, Res};
+use crate::collision::shape::{MeshSequence, Obstacle, ObstacleShape};
+use crate::error::InputError;
 use crate::io::obj::{read_obj, ObjData};
 use crate::scene::spec::{ObstacleSpec, SequenceSpec};
-use crate::scene::{InputError, MeshSequence, Obstacle, ObstacleShape};
 
 const ONE_SHAPE: &str = "expected exactly one shape: mesh, sphere, plane, box, capsule or sequence";
 
@@ -109,4 +110,51 @@ fn load_sequence(ctx: &Ctx, path: &str, seq: &SequenceSpec) -> Res<MeshSequence>
         frames.push(data.positions);
     }
     Ok(MeshSequence { mesh, frames, start_time: seq.start_time, fps })
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::collision::obstacle::{signed_volume, ObstacleBody};
+    use crate::math::{Real, Vec3};
+
+    /// Writes `frames` as `dir/body_000k.obj` (a tetrahedron scaled per frame; frame `bad` gets
+    /// an extra vertex) and a scene naming them as a sequence.
+    fn write_sequence(dir: &std::path::Path, frames: usize, bad: Option<usize>) -> String {
+        std::fs::create_dir_all(dir.join("meshes")).unwrap();
+        for k in 0..frames {
+            let s = 1.0 + k as Real;
+            let mut obj = format!("v 0 0 0\nv {s} 0 0\nv 0 {s} 0\nv 0 0 {s}\n");
+            if bad == Some(k) {
+                obj.push_str("v 9 9 9\n");
+            }
+            obj.push_str("f 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+            std::fs::write(dir.join(format!("meshes/body_{:04}.obj", 3 + k)), obj).unwrap();
+        }
+        format!(
+            r#"{{"version": 1, "frame_time": 0.04, "frames": 1,
+                "cloths": [{{"rectangle": {{"width": 1, "height": 1, "resolution": [2, 2]}},
+                             "material": {{"preset": "cotton"}}}}],
+                "obstacles": [{{"name": "body", "sequence":
+                    {{"pattern": "meshes/body_%04d.obj", "first": 3, "count": {frames},
+                      "fps": 25}}}}]}}"#
+        )
+    }
+
+    #[test]
+    fn sequence_scene_loads_and_rejects_a_mismatched_frame() {
+        let dir = std::env::temp_dir().join(format!("viewcloth_seq_{}", std::process::id()));
+        let text = write_sequence(&dir, 2, None);
+        let file = dir.join("scene.json");
+        let scene = crate::scene::load_str(&text, &file, &dir, "seq").unwrap();
+        let body = ObstacleBody::new(&scene.obstacles[0]);
+        let half = body.positions_at(0.02);
+        assert!((half[1] - Vec3::new(1.5, 0.0, 0.0)).norm() < 1e-12);
+        assert!(signed_volume(body.triangles(), &half) > 0.0);
+
+        let text = write_sequence(&dir, 3, Some(2));
+        let err = crate::scene::load_str(&text, &file, &dir, "seq").unwrap_err();
+        assert!(err.file.ends_with("meshes/body_0005.obj"), "{err}");
+        assert!(err.msg.contains("5 vertices, expected 4"), "{err}");
+        std::fs::remove_dir_all(&dir).ok();
+    }
 }

@@ -8,8 +8,8 @@ use serde_json::{Map, Value};
 
 use super::ordered::{nums, obj, J};
 use super::Res;
-use crate::scene::motion::{KeyVelocity, Keyframe, Motion, Transform};
-use crate::scene::InputError;
+use crate::error::InputError;
+use crate::math::motion::{KeyVelocity, Keyframe, Motion, Transform};
 
 mod cloth;
 

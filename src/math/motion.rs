@@ -1,15 +1,16 @@
 //! Rigid (similarity) transforms and keyframed motions.
 //!
 //! Keys hold translation, rotation (unit quaternion) and uniform scale. Between keys each
-//! component follows a cubic Hermite spline whose tangents are central differences of the
-//! neighbouring keys, (x[i+1] − x[i−1]) / (t[i+1] − t[i−1]), zero at the first and last key
-//! (ARCSim's motion splines; Catmull–Rom for evenly spaced keys). Quaternions are interpolated
-//! componentwise after aligning signs with the previous key, then normalised. Before the first
-//! key and after the last the motion holds.
+//! component follows the spline of `math::spline`: cubic Hermite, tangents central differences of
+//! the neighbouring keys, (x[i+1] − x[i−1]) / (t[i+1] − t[i−1]), zero at the first and last key
+//! (ARCSim's motion splines; Catmull–Rom for evenly spaced keys), unless a key states its own.
+//! Quaternions are interpolated componentwise after aligning signs with the previous key, then
+//! normalised. Before the first key and after the last the motion holds.
 
 use nalgebra::{Quaternion, Unit, UnitQuaternion};
 
-use crate::math::{Real, Vec3};
+use super::spline::{hermite_basis_motion, locate, Segment};
+use super::{Real, Vec3};
 
 /// p ↦ translate + rotate · (scale · p).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -119,23 +120,12 @@ impl Motion {
         if n == 0 {
             return Transform::default();
         }
-        if t <= k[0].time || n == 1 {
-            return k[0].transform;
-        }
-        if t >= k[n - 1].time {
-            return k[n - 1].transform;
-        }
-        let i = k.partition_point(|key| key.time <= t) - 1;
-        let (t0, t1) = (k[i].time, k[i + 1].time);
-        let dt = t1 - t0;
-        let s = (t - t0) / dt;
-        // Hermite basis.
-        let (h00, h10, h01, h11) = (
-            2.0 * s.powi(3) - 3.0 * s * s + 1.0,
-            s.powi(3) - 2.0 * s * s + s,
-            -2.0 * s.powi(3) + 3.0 * s * s,
-            s.powi(3) - s * s,
-        );
+        let (i, s) = match locate(k, |key| key.time, t) {
+            Segment::Hold(j) => return k[j].transform,
+            Segment::Between { i, s } => (i, s),
+        };
+        let dt = k[i + 1].time - k[i].time;
+        let [h00, h10, h01, h11] = hermite_basis_motion(s);
         let given = |j: usize| self.velocities.get(j).copied().flatten();
         let tangent = |j: usize, get: &dyn Fn(usize) -> nalgebra::DVector<Real>| {
             if let Some(v) = given(j) {
@@ -163,6 +153,15 @@ impl Motion {
             rotate: UnitQuaternion::from_quaternion(quat),
             scale: sc[0],
         }
+    }
+}
+
+/// The transform at `t` of something placed by `transform` and then moved by `motion`:
+/// `motion(t) ∘ transform`.
+pub fn transform_at(transform: &Transform, motion: Option<&Motion>, t: Real) -> Transform {
+    match motion {
+        Some(m) => m.eval(t).compose(transform),
+        None => *transform,
     }
 }
 

@@ -1,0 +1,32 @@
+//! The collision stages' parameters: repulsion thickness and stiffness, friction, self-collision,
+//! the impact-zone iteration cap and the load-time push-out depth.
+
+use crate::math::Real;
+
+/// Collision parameters (scene `collision` block, with defaults).
+#[derive(Clone, Debug, PartialEq)]
+pub struct CollisionParams {
+    /// Repulsion thickness (m).
+    pub thickness: Real,
+    /// Repulsion stiffness per unit area (N/m³).
+    pub stiffness: Real,
+    pub friction: Real,
+    pub self_friction: Real,
+    pub self_collision: bool,
+    pub max_iterations: usize,
+    pub push_out_tolerance: Real,
+}
+
+impl Default for CollisionParams {
+    fn default() -> Self {
+        CollisionParams {
+            thickness: 5e-3,
+            stiffness: 1e6,
+            friction: 0.3,
+            self_friction: 0.3,
+            self_collision: true,
+            max_iterations: 100,
+            push_out_tolerance: 15e-3,
+        }
+    }
+}

@@ -1,0 +1,43 @@
+//! A fabric: its parameters in SI units and the dispatch to the membrane and bending kernels
+//! (linear orthotropic, or measured after Wang et al. 2011).
+
+use std::sync::Arc;
+
+use super::bending::bending;
+use super::data_driven::{measured_bending, measured_membrane, MeasuredMaterial};
+use super::membrane::{membrane, MembraneRest, MembraneStiffness};
+use super::{Hinge, Projection};
+use crate::math::{Mat12, Mat9, Real, Vec12, Vec3, Vec9};
+
+/// A fabric, in SI units.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    /// Areal density (kg/m²).
+    pub density: Real,
+    pub membrane: MembraneStiffness,
+    /// Bending stiffness (N·m).
+    pub bending: Real,
+    /// Stiffness-proportional damping coefficient α (s): f_d = −α K v.
+    pub damping: Real,
+    /// Measured stretching and bending (Wang et al. 2011); when present it replaces `membrane`
+    /// and `bending`.
+    pub measured: Option<Arc<MeasuredMaterial>>,
+}
+
+impl Material {
+    /// The membrane kernel of this fabric for one face.
+    pub fn stretch(&self, x: &[Vec3; 3], rest: &MembraneRest, proj: Projection) -> (Real, Vec9, Mat9) {
+        match &self.measured {
+            Some(m) => measured_membrane(x, rest, &m.stretching, proj),
+            None => membrane(x, rest, &self.membrane, proj),
+        }
+    }
+
+    /// The bending kernel of this fabric for one hinge.
+    pub fn bend(&self, x: &[Vec3; 4], hinge: &Hinge, proj: Projection) -> (Real, Vec12, Mat12) {
+        match &self.measured {
+            Some(m) => measured_bending(x, &hinge.rest, &hinge.measured, &m.bending, proj),
+            None => bending(x, &hinge.rest, self.bending, proj),
+        }
+    }
+}
