@@ -8,8 +8,10 @@
 //! `VIEWCLOTH_FULL_SCENES=1` to run them to their last frame.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
+mod common;
+
+use common::{temp_dir, viewcloth};
 use serde_json::{json, Value};
 use viewcloth::collision::geometry::triangles_intersect;
 use viewcloth::collision::obstacle::sphere_mesh;
@@ -21,13 +23,6 @@ use viewcloth::sim::Simulation;
 
 fn scene_path(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("collisions_{name}"));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 /// A scene given inline; relative paths resolve in `base`.
@@ -99,10 +94,6 @@ fn self_intersections(sim: &Simulation) -> Vec<(usize, usize)> {
     hits
 }
 
-fn run_cli(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_viewcloth")).args(args).output().expect("run viewcloth")
-}
-
 // ---------------------------------------------------------------- (a), (b): shipped scenes
 
 /// Through the CLI: `penetrations` in stats.json is 0 at every frame, and every node clears the
@@ -114,7 +105,7 @@ fn sheet_on_sphere_stats_and_exported_obstacles_show_no_penetration() {
     let frames = frames_to_run(&scene, 30);
     let th = scene.collision.thickness;
     let out = temp_dir("sheet_on_sphere");
-    let o = run_cli(&[
+    let o = viewcloth(&[
         "simulate",
         path.to_str().unwrap(),
         "--quiet",
@@ -390,7 +381,7 @@ fn handle_naming_a_missing_or_deforming_obstacle_is_refused_with_exit_code_2() {
     ] {
         let file = dir.join(format!("{name}.json"));
         std::fs::write(&file, scene.to_string()).unwrap();
-        let o = run_cli(&["simulate", file.to_str().unwrap(), "--quiet", "--out", dir.join(name).to_str().unwrap()]);
+        let o = viewcloth(&["simulate", file.to_str().unwrap(), "--quiet", "--out", dir.join(name).to_str().unwrap()]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{name}: {err}");
         assert!(err.contains("cloths[0].handles[0].obstacle") && err.contains(expect), "{name}: {err}");
@@ -549,7 +540,7 @@ fn sheet_10_cm_inside_a_box_is_refused_naming_cloth_and_obstacle() {
     let file = dir.join("deep.json");
     std::fs::write(&file, sheet_in_box(0.1).to_string()).unwrap();
     let out = dir.join("out");
-    let o = run_cli(&["simulate", file.to_str().unwrap(), "--quiet", "--out", out.to_str().unwrap()]);
+    let o = viewcloth(&["simulate", file.to_str().unwrap(), "--quiet", "--out", out.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert_eq!(err.lines().count(), 1, "one line: {err}");

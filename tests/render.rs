@@ -5,21 +5,13 @@
 //! exit code 2 and writes nothing.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use std::sync::OnceLock;
 
+mod common;
+use common::{temp_dir, viewcloth};
+
 const CAMERA: &str = "cameras/sheet_on_sphere_pan.json";
-
-fn viewcloth(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_viewcloth")).args(args).output().expect("run viewcloth")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("render_{name}"));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// The simulated run, shared by the tests (each renders into its own copy).
 fn simulated() -> &'static Path {
