@@ -1,14 +1,16 @@
 //! Shared by the integration tests (`mod common;`): the binary, fresh temporary directories, the
-//! deterministic random generator of the unit tests, finite-difference checks.
+//! deterministic random generator of the unit tests, scenes given inline, finite-difference
+//! checks.
 #![allow(dead_code)]
 
 pub mod fd;
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 // For the generator's module, which takes them from its parent (as in `src/math`).
 use viewcloth::math::{Real, Vec3};
+use viewcloth::scene::{self, Scene};
 
 /// One generator for unit and integration tests: the unit tests' file, compiled here too.
 #[path = "../../src/math/test_rng.rs"]
@@ -28,4 +30,9 @@ pub fn temp_dir(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap_or_else(|e| panic!("{}: {e}", d.display()));
     d
+}
+
+/// A scene given inline as JSON, named `name`; relative paths resolve in `base`.
+pub fn inline_scene(v: &serde_json::Value, base: &Path, name: &str) -> Scene {
+    scene::load_str(&v.to_string(), Path::new(name), base, name).unwrap_or_else(|e| panic!("{e}"))
 }
