@@ -11,7 +11,8 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use common::{fd_errors, max_abs, FdErrors};
+use common::fd::{fd_errors, max_abs, FdErrors};
+use common::{temp_dir, Rng};
 use nalgebra::{SMatrix, SVector};
 use viewcloth::collision::sdf::MeshSdf;
 use viewcloth::forces::bending::{bending, dihedral_angle, BendingRest};
@@ -44,13 +45,6 @@ fn confs(dir: &Path) -> Vec<PathBuf> {
         .collect();
     v.sort();
     v
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -384,11 +378,8 @@ fn measured_stretching_with_constant_samples_is_a_potential() {
 fn measured_stretching_jacobian_matches_finite_differences() {
     let mat = MeasuredMaterial::new(&KNIT, 2.0, 1.0);
     let mut tested = 0;
-    let mut s = 11u64;
-    let mut rnd = move || {
-        s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (s >> 11) as Real / (1u64 << 53) as Real - 0.5
-    };
+    let mut rng = Rng(11);
+    let mut rnd = move || rng.uniform() - 0.5;
     for _ in 0..40 {
         let f = Mat2::new(1.0 + 0.3 * rnd(), 0.2 * rnd(), 0.2 * rnd(), 1.0 + 0.3 * rnd());
         let (x, rest) = strained_triangle(f, 0.05 * rnd());

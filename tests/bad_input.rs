@@ -3,19 +3,10 @@
 //! without a panic and without creating the output directory.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn viewcloth(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_viewcloth")).args(args).output().expect("run viewcloth")
-}
-
-/// A fresh directory for one case.
-fn case_dir(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("viewcloth-bad-input-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+mod common;
+use common::{temp_dir, viewcloth};
 
 /// A valid scene around a cloth block (`mesh` or `rectangle` plus anything else).
 fn scene_with_cloth(cloth: &str) -> String {
@@ -351,7 +342,7 @@ fn check_failure(what: &str, out: &Output, file: &Path, case: &Case) -> String {
 fn bad_input_exits_2_with_one_line_naming_file_and_field() {
     let mut failures = Vec::new();
     for case in cases() {
-        let dir = case_dir(case.name);
+        let dir = temp_dir(case.name);
         for (name, text) in &case.files {
             std::fs::write(dir.join(name), text).unwrap();
         }
@@ -411,7 +402,7 @@ fn check_accepts_every_shipped_scene() {
 
 #[test]
 fn check_rejects_a_bad_scene_among_good_ones() {
-    let dir = case_dir("check-mixed");
+    let dir = temp_dir("check-mixed");
     let bad = dir.join("bad.json");
     std::fs::write(&bad, rect_scene().replace("\"frames\": 2", "\"frames\": 0")).unwrap();
     let good = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/hanging_sheet.json");

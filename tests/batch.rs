@@ -3,8 +3,8 @@
 
 use std::path::Path;
 
-mod cli;
-use cli::{temp_dir, viewcloth};
+mod common;
+use common::{temp_dir, viewcloth};
 
 fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -12,7 +12,7 @@ fn root() -> &'static Path {
 
 #[test]
 fn shots_run_two_at_a_time_match_simulate_bit_for_bit() {
-    let dir = temp_dir("batch_shots");
+    let dir = temp_dir("shots");
     let scenes = root().join("scenes");
     let cameras = root().join("cameras");
     let shots = format!(
@@ -60,7 +60,7 @@ fn shots_run_two_at_a_time_match_simulate_bit_for_bit() {
 
 #[test]
 fn a_bad_shot_is_refused_before_anything_runs() {
-    let dir = temp_dir("batch_bad");
+    let dir = temp_dir("bad");
     let scene = root().join("scenes/hanging_sheet.json");
     let shots = format!(
         r#"{{ "version": 1, "shots": [ {{ "scene": "{}", "out": "a" }}, {{ "scene": "missing.json", "out": "b" }} ] }}"#,

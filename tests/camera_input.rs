@@ -2,18 +2,12 @@
 //! error of one line naming the file and the field (or line), never a panic; the example camera
 //! loads and frames only part of its scene's sheet.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
+
+mod common;
 
 use viewcloth::camera::Camera;
 use viewcloth::math::{Real, Vec3};
-
-/// A fresh directory for this test binary.
-fn case_dir() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("viewcloth-camera-input-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// A valid camera file with `key1` as its second key and `extra` top-level fields.
 fn camera(extra: &str, key1: &str) -> String {
@@ -61,7 +55,7 @@ fn bad_camera_files_name_file_and_field() {
         ("not_json.json", "camera: dolly\n".to_string(), "line 1"),
         ("empty.json", String::new(), "line 1"),
     ];
-    let dir = case_dir();
+    let dir = common::temp_dir("cameras");
     for (name, contents, location) in cases {
         let path = dir.join(name);
         std::fs::write(&path, contents).unwrap();

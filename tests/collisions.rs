@@ -6,10 +6,14 @@
 //!
 //! The shipped scenes run shortened (through the part where their collisions happen); set
 //! `VIEWCLOTH_FULL_SCENES=1` to run them to their last frame.
+//!
+//! Regressions of fixed collision bugs are in `tests/issue_*.rs`.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
+mod common;
+
+use common::{inline_scene, temp_dir, viewcloth};
 use serde_json::{json, Value};
 use viewcloth::collision::geometry::triangles_intersect;
 use viewcloth::collision::obstacle::sphere_mesh;
@@ -21,18 +25,6 @@ use viewcloth::sim::Simulation;
 
 fn scene_path(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("collisions_{name}"));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-/// A scene given inline; relative paths resolve in `base`.
-fn inline_scene(v: &Value, base: &Path, name: &str) -> Scene {
-    scene::load_str(&v.to_string(), Path::new(name), base, name).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Frames to run of a shipped scene: `short`, or all of them with VIEWCLOTH_FULL_SCENES set.
@@ -99,10 +91,6 @@ fn self_intersections(sim: &Simulation) -> Vec<(usize, usize)> {
     hits
 }
 
-fn run_cli(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_viewcloth")).args(args).output().expect("run viewcloth")
-}
-
 // ---------------------------------------------------------------- (a), (b): shipped scenes
 
 /// Through the CLI: `penetrations` in stats.json is 0 at every frame, and every node clears the
@@ -114,7 +102,7 @@ fn sheet_on_sphere_stats_and_exported_obstacles_show_no_penetration() {
     let frames = frames_to_run(&scene, 30);
     let th = scene.collision.thickness;
     let out = temp_dir("sheet_on_sphere");
-    let o = run_cli(&[
+    let o = viewcloth(&[
         "simulate",
         path.to_str().unwrap(),
         "--quiet",
@@ -390,7 +378,7 @@ fn handle_naming_a_missing_or_deforming_obstacle_is_refused_with_exit_code_2() {
     ] {
         let file = dir.join(format!("{name}.json"));
         std::fs::write(&file, scene.to_string()).unwrap();
-        let o = run_cli(&["simulate", file.to_str().unwrap(), "--quiet", "--out", dir.join(name).to_str().unwrap()]);
+        let o = viewcloth(&["simulate", file.to_str().unwrap(), "--quiet", "--out", dir.join(name).to_str().unwrap()]);
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(2), "{name}: {err}");
         assert!(err.contains("cloths[0].handles[0].obstacle") && err.contains(expect), "{name}: {err}");
@@ -400,114 +388,6 @@ fn handle_naming_a_missing_or_deforming_obstacle_is_refused_with_exit_code_2() {
     both["cloths"][0]["handles"][0]["motion"] = json!([{ "time": 0 }]);
     let err = scene::load_str(&both.to_string(), Path::new("both.json"), Path::new("."), "both").unwrap_err();
     assert!(err.to_string().contains("cloths[0].handles[0].obstacle"), "{err}");
-}
-
-/// Regression (skirt_mannequin blew up when a leg swung into the skirt): a node just in front of
-/// a thin tilted obstacle lies inside the bounding box of the obstacle's far-side face and behind
-/// it. That face must not make a contact (nor win over the near face as "more penetrating"), or
-/// the repulsion pushes the node through the obstacle toward it.
-#[test]
-fn issue_far_side_faces_of_a_thin_obstacle_do_not_push_nodes_through() {
-    let v = json!({
-        "version": 1, "frame_time": 0.04, "frames": 1,
-        "cloths": [{
-            "name": "patch",
-            "rectangle": { "width": 0.02, "height": 0.02, "resolution": [1, 1] },
-            // Lengthwise along the plank's long axis: parallel to its faces.
-            "transform": { "translate": [0.0, -0.01, 0.0], "rotate": [-68, 0, 1, 0] },
-            "material": { "preset": "cotton" }
-        }],
-        // A 2 cm plank, 1 m long, tilted by 22° like a swinging leg.
-        "obstacles": [{ "name": "plank", "box": { "size": [0.02, 0.3, 1.0] }, "transform": { "rotate": [22, 0, 1, 0] } }],
-        "collision": { "thickness": 0.004 }
-    });
-    let mut scene = inline_scene(&v, Path::new("."), "plank");
-    // The patch 2 mm in front of the plank's +x face, 30 cm below its middle.
-    let (s, c) = 22.0_f64.to_radians().sin_cos();
-    let (out, axis) = (Vec3::new(c, 0.0, -s), Vec3::new(s, 0.0, c));
-    for node in &mut scene.mesh.nodes {
-        node.x += out * (0.01 + 0.002) - axis * 0.3;
-    }
-    let mut sim = Simulation::new(scene).unwrap();
-    assert_eq!(sim.state.pushed_out, 0);
-    let n = sim.state.mesh.nodes.len();
-    let mesh = sim.state.mesh.clone();
-    let contacts = sim.ws.collisions.as_mut().unwrap().proximity(&mesh, &vec![1e-4; n]);
-    let node_face: Vec<_> = contacts.iter().filter(|c| c.nodes[0] < n && c.nodes[1] >= n && c.w[0] == 1.0).collect();
-    assert_eq!(node_face.len(), n, "one contact per node with the plank: {node_face:?}");
-    for c in node_face {
-        assert!(c.n.dot(&out) > 0.99, "node {} is pushed into the plank (n = {:?})", c.nodes[0], c.n);
-    }
-}
-
-/// Regression (sphere.json stopped at frame 52): an obstacle moving farther in one step than the
-/// thickness (the sphere sweeps 5–10 mm per step through a 5 mm sheet) ends the step with the
-/// cloth in front of it behind its surface, deeper than the thickness. That cloth must still get
-/// repulsion contacts pushing it out; without them the implicit solve carried hundreds of nodes
-/// into the sphere and left them all to the impact zones, which hit the iteration cap.
-#[test]
-fn issue_obstacle_moving_farther_than_the_thickness_in_a_step_still_repels_the_cloth() {
-    let v = json!({
-        "version": 1, "frame_time": 0.04, "frames": 1,
-        "cloths": [{
-            "name": "patch",
-            "rectangle": { "width": 0.04, "height": 0.04, "resolution": [2, 2] },
-            "transform": { "translate": [-0.02, -0.02, 0.001] },
-            "material": { "preset": "cotton" }
-        }],
-        "obstacles": [{ "name": "block", "box": { "size": [1.0, 1.0, 0.2] }, "transform": { "translate": [0, 0, -0.1] } }],
-        "collision": { "thickness": 0.004 }
-    });
-    let mut sim = Simulation::new(inline_scene(&v, Path::new("."), "sweep")).unwrap();
-    let n = sim.state.mesh.nodes.len();
-    let mesh = sim.state.mesh.clone();
-    let world = sim.ws.collisions.as_mut().unwrap();
-    // The block rises 9 mm over the step: the patch, 1 mm above it, ends 8 mm inside.
-    world.obs_x1 = world.obs_x0.iter().map(|p| p + Vec3::new(0.0, 0.0, 0.009)).collect();
-    let contacts = world.proximity(&mesh, &vec![1e-4; n]);
-    let node_face: Vec<_> = contacts.iter().filter(|c| c.nodes[0] < n && c.nodes[1] >= n && c.w[0] == 1.0).collect();
-    assert_eq!(node_face.len(), n, "one contact per node with the block: {node_face:?}");
-    for c in node_face {
-        assert!(c.n.dot(&Vec3::z()) > 0.99, "node {} is not pushed out of the block (n = {:?})", c.nodes[0], c.n);
-        let x = c.nodes.map(|i| if i < n { mesh.nodes[i].x } else { world.obs_x1[i - n] });
-        assert!((c.gap(&x) + 0.008 + 0.004).abs() < 1e-9, "gap {}", c.gap(&x));
-    }
-}
-
-/// Regression (a first tablecloth_pull whose handle dipped 0.1 mm into the table ran 10 s a frame):
-/// impacts that only pinned nodes could resolve are left to the handle, not retried until the
-/// iteration cap on every step.
-#[test]
-fn issue_handle_driven_into_an_obstacle_does_not_exhaust_the_iterations() {
-    let v = json!({
-        "version": 1, "frame_time": 0.04, "steps_per_frame": 8, "frames": 10,
-        "cloths": [{
-            "name": "sheet",
-            "rectangle": { "width": 0.2, "height": 0.2, "resolution": [6, 6] },
-            "transform": { "translate": [-0.1, -0.1, 0.41] },
-            "material": { "preset": "cotton" },
-            "handles": [{
-                "region": { "min": [0, 0], "max": [0.001, 0.2] },
-                "motion": [{ "time": 0 }, { "time": 0.2, "translate": [0, 0, -0.05] }]
-            }]
-        }],
-        "obstacles": [{ "name": "block", "box": { "size": [1.0, 1.0, 0.4] }, "transform": { "translate": [0, 0, 0.2] } }],
-        "collision": { "thickness": 0.004 }
-    });
-    let mut sim = Simulation::new(inline_scene(&v, Path::new("."), "dive")).unwrap();
-    for _ in 0..10 {
-        sim.advance_frame().unwrap();
-    }
-    let c = &sim.ws.counters;
-    assert_eq!(c.cap_hits, 0, "{c:?}");
-    // The free nodes dragged along against the block still need a few iterations per step (about
-    // 17 here), far from the cap of 100.
-    assert!(c.ccd_iterations <= 40 * 80, "{} CCD iterations in 80 steps", c.ccd_iterations);
-    // The handle went in (it wins over collisions); the free nodes did not.
-    let x = sim.state.mesh.positions();
-    let pinned = &sim.state.handle_nodes[0];
-    assert!(pinned.iter().all(|&i| x[i].z < 0.37));
-    assert!((0..x.len()).filter(|i| !pinned.contains(i)).all(|i| x[i].z > 0.4), "a free node entered the block");
 }
 
 // ---------------------------------------------------------------- (f) initial intersection
@@ -549,7 +429,7 @@ fn sheet_10_cm_inside_a_box_is_refused_naming_cloth_and_obstacle() {
     let file = dir.join("deep.json");
     std::fs::write(&file, sheet_in_box(0.1).to_string()).unwrap();
     let out = dir.join("out");
-    let o = run_cli(&["simulate", file.to_str().unwrap(), "--quiet", "--out", out.to_str().unwrap()]);
+    let o = viewcloth(&["simulate", file.to_str().unwrap(), "--quiet", "--out", out.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert_eq!(err.lines().count(), 1, "one line: {err}");

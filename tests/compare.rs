@@ -6,8 +6,8 @@
 
 use std::path::{Path, PathBuf};
 
-mod cli;
-use cli::{temp_dir, viewcloth};
+mod common;
+use common::{temp_dir, viewcloth};
 
 use serde_json::Value;
 
@@ -54,7 +54,7 @@ fn err(run: &Value, field: &str, measure: &str) -> f64 {
 
 #[test]
 fn compare_reports_errors_against_time_with_a_chaos_floor() {
-    let dir = temp_dir("compare_shot");
+    let dir = temp_dir("shot");
     let scene = shot(&dir);
     let out = dir.join("out");
     let r =
@@ -108,7 +108,7 @@ fn compare_reports_errors_against_time_with_a_chaos_floor() {
 
 #[test]
 fn compare_without_a_camera_is_refused_in_one_line() {
-    let dir = temp_dir("compare_no_camera");
+    let dir = temp_dir("no_camera");
     let scene = shot(&dir);
     let text = std::fs::read_to_string(&scene).unwrap().replace("  \"camera\": \"camera.json\",\n", "");
     std::fs::write(&scene, text).unwrap();

@@ -6,7 +6,8 @@
 
 mod common;
 
-use common::{fd_errors, max_abs, FdErrors};
+use common::fd::{fd_errors, max_abs, FdErrors};
+use common::Rng;
 use nalgebra::{SMatrix, SVector, UnitQuaternion};
 use viewcloth::forces::bending::{bending, dihedral_angle, BendingRest};
 use viewcloth::forces::membrane::{membrane, MembraneRest, MembraneStiffness};
@@ -15,33 +16,15 @@ use viewcloth::forces::{edge_angles, Projection, RestState};
 use viewcloth::math::dual::V3;
 use viewcloth::math::{Mat3, Real, Vec2, Vec3};
 
-/// SplitMix64: a small deterministic generator, so failures reproduce.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [lo, hi).
-    fn uniform(&mut self, lo: Real, hi: Real) -> Real {
-        lo + (hi - lo) * (self.next_u64() >> 11) as Real / (1u64 << 53) as Real
-    }
-    fn vec3(&mut self, s: Real) -> Vec3 {
-        Vec3::new(self.uniform(-s, s), self.uniform(-s, s), self.uniform(-s, s))
-    }
-    fn rotation(&mut self) -> UnitQuaternion<Real> {
-        let axis = loop {
-            let a = self.vec3(1.0);
-            if a.norm() > 0.1 {
-                break a;
-            }
-        };
-        UnitQuaternion::from_scaled_axis(axis.normalize() * self.uniform(-3.0, 3.0))
-    }
+/// A uniformly random axis (away from the origin) and an angle in [−3, 3) rad.
+fn rotation(rng: &mut Rng) -> UnitQuaternion<Real> {
+    let axis = loop {
+        let a = rng.vec();
+        if a.norm() > 0.1 {
+            break a;
+        }
+    };
+    UnitQuaternion::from_scaled_axis(axis.normalize() * rng.range(-3.0, 3.0))
 }
 
 /// The step sizes, relative to the element's length scale.
@@ -108,7 +91,7 @@ const ANISO: MembraneStiffness = MembraneStiffness { k11: 2000.0, k12: 150.0, k2
 /// A random well-shaped material-space triangle, counter-clockwise, edges of order `s`.
 fn random_rest_triangle(rng: &mut Rng, s: Real) -> [Vec2; 3] {
     loop {
-        let u = [0, 1, 2].map(|_| Vec2::new(rng.uniform(-s, s), rng.uniform(-s, s)));
+        let u = [0, 1, 2].map(|_| Vec2::new(rng.range(-s, s), rng.range(-s, s)));
         let (a, b) = (u[1] - u[0], u[2] - u[0]);
         let area = 0.5 * (a.x * b.y - a.y * b.x);
         let longest = a.norm().max(b.norm()).max((u[2] - u[1]).norm());
@@ -122,16 +105,16 @@ fn random_rest_triangle(rng: &mut Rng, s: Real) -> [Vec2; 3] {
 /// World positions x = R (F u) + t with F = diag(s₁, s₂) in a rotated material frame, plus
 /// noise: `stretch` picks the principal stretches.
 fn deformed(rng: &mut Rng, u: &[Vec2; 3], s: (Real, Real), noise: Real) -> [Vec3; 3] {
-    let phi = rng.uniform(0.0, std::f64::consts::TAU);
+    let phi = rng.range(0.0, std::f64::consts::TAU);
     let (c, si) = (phi.cos(), phi.sin());
-    let r = rng.rotation();
-    let t = rng.vec3(1.0);
+    let r = rotation(rng);
+    let t = rng.vec();
     u.map(|p| {
         // Rotate the material frame by φ, stretch, rotate back: F symmetric with stretches s.
         let q = Vec2::new(c * p.x + si * p.y, -si * p.x + c * p.y);
         let q = Vec2::new(s.0 * q.x, s.1 * q.y);
         let q = Vec2::new(c * q.x - si * q.y, si * q.x + c * q.y);
-        r * Vec3::new(q.x, q.y, 0.0) + t + rng.vec3(noise)
+        r * Vec3::new(q.x, q.y, 0.0) + t + rng.vec() * noise
     })
 }
 
@@ -154,10 +137,10 @@ fn membrane_gradient_and_hessian_match_finite_differences() {
             let u = random_rest_triangle(&mut rng, 0.05);
             let rest = MembraneRest::new(u).expect("well-shaped rest triangle");
             let k = MembraneStiffness {
-                k11: ANISO.k11 * rng.uniform(0.5, 2.0),
-                k12: ANISO.k12 * rng.uniform(0.0, 1.0),
-                k22: ANISO.k22 * rng.uniform(0.5, 2.0),
-                k33: ANISO.k33 * rng.uniform(0.5, 2.0),
+                k11: ANISO.k11 * rng.range(0.5, 2.0),
+                k12: ANISO.k12 * rng.range(0.0, 1.0),
+                k22: ANISO.k22 * rng.range(0.5, 2.0),
+                k33: ANISO.k33 * rng.range(0.5, 2.0),
             };
             let x = deformed(&mut rng, &u, s, 0.01);
             let len = (u[1] - u[0]).norm();
@@ -176,7 +159,7 @@ fn membrane_psd_projection() {
     for _ in 0..200 {
         let u = random_rest_triangle(&mut rng, 0.05);
         let rest = MembraneRest::new(u).unwrap();
-        let s = (rng.uniform(0.3, 1.4), rng.uniform(0.3, 1.4));
+        let s = (rng.range(0.3, 1.4), rng.range(0.3, 1.4));
         let x = deformed(&mut rng, &u, s, 0.005);
         let (e0, g0, h_exact) = membrane(&x, &rest, &ANISO, Projection::Exact);
         let (e1, g1, h_psd) = membrane(&x, &rest, &ANISO, Projection::Psd);
@@ -198,9 +181,9 @@ fn membrane_psd_equals_exact_under_pure_tension() {
         let rest = MembraneRest::new(u).unwrap();
         // Stretched along the material axes (φ = 0): E₁₂ = 0 and E₁₁, E₂₂ > 0, so the stress
         // S = C ε is positive definite for a non-negative coupling.
-        let s = (rng.uniform(1.01, 1.3), rng.uniform(1.01, 1.3));
-        let r = rng.rotation();
-        let t = rng.vec3(1.0);
+        let s = (rng.range(1.01, 1.3), rng.range(1.01, 1.3));
+        let r = rotation(&mut rng);
+        let t = rng.vec();
         let x = u.map(|p| r * Vec3::new(s.0 * p.x, s.1 * p.y, 0.0) + t);
         let (_, _, exact) = membrane(&x, &rest, &ANISO, Projection::Exact);
         let (_, _, psd) = membrane(&x, &rest, &ANISO, Projection::Psd);
@@ -213,11 +196,11 @@ fn membrane_psd_equals_exact_under_pure_tension() {
 fn membrane_rigid_motion_gives_zero_force() {
     let mut rng = Rng(4);
     for _ in 0..100 {
-        let size = rng.uniform(0.01, 0.5);
+        let size = rng.range(0.01, 0.5);
         let u = random_rest_triangle(&mut rng, size);
         let rest = MembraneRest::new(u).unwrap();
-        let r = rng.rotation();
-        let t = rng.vec3(10.0);
+        let r = rotation(&mut rng);
+        let t = rng.vec() * 10.0;
         let x = u.map(|p| r * Vec3::new(p.x, p.y, 0.0) + t);
         let (e, g, _) = membrane(&x, &rest, &ANISO, Projection::Psd);
         let len = (u[1] - u[0]).norm();
@@ -240,15 +223,15 @@ fn membrane_rigid_motion_gives_zero_force() {
 fn random_hinge(rng: &mut Rng, theta: Real, len: Real) -> [Vec3; 4] {
     let e = Vec3::new(len, 0.0, 0.0);
     let w = |rng: &mut Rng, ang: Real| {
-        let h = len * rng.uniform(0.4, 1.2);
-        let along = len * rng.uniform(-0.2, 1.2);
+        let h = len * rng.range(0.4, 1.2);
+        let along = len * rng.range(-0.2, 1.2);
         Vec3::new(along, h * ang.cos(), h * ang.sin())
     };
     // Wing 2 at angle 0 in the (y, z) plane, wing 3 opposite, rotated by θ.
     let x2 = w(rng, 0.0);
     let x3 = w(rng, std::f64::consts::PI + theta);
-    let r = rng.rotation();
-    let t = rng.vec3(1.0);
+    let r = rotation(rng);
+    let t = rng.vec();
     [Vec3::zeros(), e, x2, x3].map(|p| r * p + t)
 }
 
@@ -271,14 +254,14 @@ fn bending_gradient_and_hessian_match_finite_differences() {
     let thetas = [-2.0, -0.7, 0.3, 1.1, 2.4, 1e-3, -2e-4];
     for trial in 0..5 {
         for &theta in &thetas {
-            let len = rng.uniform(0.01, 0.2);
+            let len = rng.range(0.01, 0.2);
             let x = random_hinge(&mut rng, theta, len);
             let measured = angle(&x);
             // The hinge builder's sign convention need not match; the magnitude must.
             assert!((measured.abs() - theta.abs()).abs() < 1e-9, "hinge built for θ = {theta} measures {measured}");
-            for theta0 in [rng.uniform(-1.5, 1.5), 0.0] {
-                let rest = BendingRest { shape: rng.uniform(1.0, 6.0), theta0 };
-                let kb = rng.uniform(1e-6, 1e-4);
+            for theta0 in [rng.range(-1.5, 1.5), 0.0] {
+                let rest = BendingRest { shape: rng.range(1.0, 6.0), theta0 };
+                let kb = rng.range(1e-6, 1e-4);
                 let what = format!("bending trial {trial}, θ = {measured:.4}, θ̄ = {theta0:.4}");
                 let (_, _, h) = bending(&x, &rest, kb, Projection::Exact);
                 assert_symmetric(&what, &h);
@@ -292,10 +275,10 @@ fn bending_gradient_and_hessian_match_finite_differences() {
 fn bending_psd_projection() {
     let mut rng = Rng(6);
     for _ in 0..200 {
-        let theta = rng.uniform(-2.5, 2.5);
-        let len = rng.uniform(0.01, 0.2);
+        let theta = rng.range(-2.5, 2.5);
+        let len = rng.range(0.01, 0.2);
         let x = random_hinge(&mut rng, theta, len);
-        let rest = BendingRest { shape: rng.uniform(1.0, 6.0), theta0: rng.uniform(-1.5, 1.5) };
+        let rest = BendingRest { shape: rng.range(1.0, 6.0), theta0: rng.range(-1.5, 1.5) };
         let (e0, g0, _) = bending(&x, &rest, 1e-5, Projection::Exact);
         let (e1, g1, h) = bending(&x, &rest, 1e-5, Projection::Psd);
         assert_eq!(e0, e1);
@@ -308,9 +291,9 @@ fn bending_psd_projection() {
 fn bending_psd_equals_exact_at_rest_angle() {
     let mut rng = Rng(7);
     for _ in 0..50 {
-        let (theta, len) = (rng.uniform(-2.5, 2.5), rng.uniform(0.01, 0.2));
+        let (theta, len) = (rng.range(-2.5, 2.5), rng.range(0.01, 0.2));
         let x = random_hinge(&mut rng, theta, len);
-        let rest = BendingRest { shape: rng.uniform(1.0, 6.0), theta0: angle(&x) };
+        let rest = BendingRest { shape: rng.range(1.0, 6.0), theta0: angle(&x) };
         let (e, g, exact) = bending(&x, &rest, 1e-5, Projection::Exact);
         let (_, _, psd) = bending(&x, &rest, 1e-5, Projection::Psd);
         assert_eq!(e, 0.0);
@@ -324,13 +307,13 @@ fn bending_psd_equals_exact_at_rest_angle() {
 fn bending_rigid_motion_gives_zero_force() {
     let mut rng = Rng(8);
     for _ in 0..100 {
-        let len = rng.uniform(0.01, 0.5);
-        let theta = rng.uniform(-2.5, 2.5);
+        let len = rng.range(0.01, 0.5);
+        let theta = rng.range(-2.5, 2.5);
         let x = random_hinge(&mut rng, theta, len);
         let rest = BendingRest { shape: 3.0, theta0: angle(&x) };
         let kb = 1e-5;
-        let r = rng.rotation();
-        let t = rng.vec3(10.0);
+        let r = rotation(&mut rng);
+        let t = rng.vec() * 10.0;
         let y = x.map(|p| r * p + t);
         let (e, g, h) = bending(&y, &rest, kb, Projection::Psd);
         // Gauss–Newton Hessian 2c ∇θ∇θᵀ gives the force scale of a unit angle change.
@@ -353,9 +336,9 @@ fn wind_velocity_jacobian_matches_finite_differences() {
     let mut rng = Rng(9);
     let mut checked = 0;
     while checked < 60 {
-        let x = [0, 1, 2].map(|_| rng.vec3(0.1));
-        let v = [0, 1, 2].map(|_| rng.vec3(2.0));
-        let wind = Wind { velocity: rng.vec3(10.0), density: rng.uniform(0.5, 2.0), drag: rng.uniform(0.0, 0.5) };
+        let x = [0, 1, 2].map(|_| rng.vec() * 0.1);
+        let v = [0, 1, 2].map(|_| rng.vec() * 2.0);
+        let wind = Wind { velocity: rng.vec() * 10.0, density: rng.range(0.5, 2.0), drag: rng.range(0.0, 0.5) };
         let n = (x[1] - x[0]).cross(&(x[2] - x[0]));
         let vrel = wind.velocity - (v[0] + v[1] + v[2]) / 3.0;
         let vn = n.normalize().dot(&vrel);
@@ -430,8 +413,7 @@ fn folded_strip_obj() -> String {
 
 #[test]
 fn rigid_motion_of_rest_mesh_gives_zero_elastic_force() {
-    let dir = std::env::temp_dir().join(format!("viewcloth-forces-fd-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::temp_dir("strip");
     std::fs::write(dir.join("strip.obj"), folded_strip_obj()).unwrap();
     let json = r#"{"version": 1, "frame_time": 0.04, "frames": 1,
         "cloths": [{"mesh": "strip.obj", "material": {"preset": "denim"}}]}"#;
@@ -473,8 +455,8 @@ fn rigid_motion_of_rest_mesh_gives_zero_elastic_force() {
     assert!(g <= 1e-11 * scale && e <= 1e-20, "rest mesh: energy {e:e}, force {g:e}");
     let mut rng = Rng(10);
     for _ in 0..10 {
-        let r = rng.rotation();
-        let t = rng.vec3(5.0);
+        let r = rotation(&mut rng);
+        let t = rng.vec() * 5.0;
         let x0: Vec<Vec3> = mesh.nodes.iter().map(|n| n.x).collect();
         for (n, p) in mesh.nodes.iter_mut().zip(&x0) {
             n.x = r * p + t;

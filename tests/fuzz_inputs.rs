@@ -7,28 +7,13 @@
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
+mod common;
+
+use common::{temp_dir, Rng};
 use serde_json::{json, Value};
 use viewcloth::io::obj::parse_obj;
 use viewcloth::scene;
 use viewcloth::sim::Simulation;
-
-/// xorshift64*: a small deterministic generator.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545F4914F6CDD1D)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-    fn unit(&mut self) -> f64 {
-        (self.next() >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
 
 const TOKENS: &[&str] = &[
     "{",
@@ -93,7 +78,7 @@ fn mutate(rng: &mut Rng, seed: &str) -> String {
         match rng.below(6) {
             0 if !b.is_empty() => {
                 let k = rng.below(b.len());
-                b[k] = rng.next() as u8;
+                b[k] = rng.next_u64() as u8;
             }
             1 => {
                 let t = TOKENS[rng.below(TOKENS.len())].as_bytes();
@@ -205,8 +190,7 @@ fn mutated_objs_never_panic() {
     };
     let mut all = vec![grid];
     all.extend(seeds(&scenes_dir().join("stress/meshes"), "obj"));
-    let dir = std::env::temp_dir().join(format!("viewcloth-fuzz-obj-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = temp_dir("obj");
     let scene_text = json!({
         "version": 1, "frame_time": 0.04, "frames": 1,
         "cloths": [{ "mesh": "m.obj", "material": { "preset": "cotton" } }]
@@ -232,22 +216,22 @@ fn mutated_objs_never_panic() {
 fn random_valid_scenes_load_and_step() {
     let mut rng = Rng(0x5EED_0003);
     for i in 0..12 {
-        let (w, h) = (0.2 + rng.unit(), 0.2 + rng.unit());
+        let (w, h) = (0.2 + rng.uniform(), 0.2 + rng.uniform());
         let (nx, ny) = (2 + rng.below(10), 2 + rng.below(10));
         let presets = ["cotton", "denim", "silk", "jersey"];
         let mut cloth = json!({
             "rectangle": { "width": w, "height": h, "resolution": [nx, ny] },
-            "transform": { "translate": [-0.5 * w, -0.5 * h, 0.3 + rng.unit()], "rotate": [360.0 * rng.unit(), rng.unit(), rng.unit(), 1.0] },
-            "material": { "preset": presets[rng.below(4)], "stretching_mult": 0.1 + 10.0 * rng.unit(), "density": 0.02 + rng.unit() },
+            "transform": { "translate": [-0.5 * w, -0.5 * h, 0.3 + rng.uniform()], "rotate": [360.0 * rng.uniform(), rng.uniform(), rng.uniform(), 1.0] },
+            "material": { "preset": presets[rng.below(4)], "stretching_mult": 0.1 + 10.0 * rng.uniform(), "density": 0.02 + rng.uniform() },
             "handles": [{ "nodes": [rng.below((nx + 1) * (ny + 1))] }]
         });
         if rng.below(2) == 0 {
             cloth["remesh"] =
-                json!({ "refine_angle": 0.3, "size": [0.02 + 0.05 * rng.unit(), 0.3], "aspect_min": 0.2 });
+                json!({ "refine_angle": 0.3, "size": [0.02 + 0.05 * rng.uniform(), 0.3], "aspect_min": 0.2 });
         }
         let mut v = json!({ "version": 1, "frame_time": 0.04, "steps_per_frame": 1 + rng.below(8), "frames": 2, "cloths": [cloth] });
         if rng.below(2) == 0 {
-            v["obstacles"] = json!([{ "sphere": { "radius": 0.05 + 0.1 * rng.unit() }, "transform": { "translate": [0, 0, -0.3] } }]);
+            v["obstacles"] = json!([{ "sphere": { "radius": 0.05 + 0.1 * rng.uniform() }, "transform": { "translate": [0, 0, -0.3] } }]);
         }
         let file = scenes_dir().join(format!("random_{i}.json"));
         let scene =

@@ -3,10 +3,13 @@
 //! uninterrupted run's. The scene remeshes adaptively, collides with a moving obstacle and has
 //! handles (renumbered by remeshing), so every kind of state a checkpoint holds is exercised.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
+mod common;
+
+use common::temp_dir;
 use serde_json::{json, Value};
 use viewcloth::io::obj::parse_obj;
 use viewcloth::scene;
@@ -14,13 +17,6 @@ use viewcloth::sim::checkpoint::{self, RunRecord};
 use viewcloth::sim::Simulation;
 
 const FRAMES: usize = 14;
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("viewcloth-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// sheet_on_sphere, coarser and shorter, with the sphere moving from the start.
 fn scene_json() -> Value {

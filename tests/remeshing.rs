@@ -6,18 +6,15 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+mod common;
+
+use common::temp_dir;
 use serde_json::Value;
 use viewcloth::scene::{self, RemeshMode};
 use viewcloth::sim::Simulation;
 
 fn scene_path(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    d
 }
 
 fn run_cli(scene: &Path, out: &Path, extra: &[&str]) -> Value {

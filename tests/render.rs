@@ -1,28 +1,17 @@
 //! `viewcloth render` on 30 frames of `sheet_on_sphere` (obstacles exported), simulated once:
-//! every tenth frame gives a valid 320×180 PNG (checked by an independent reader), the same bytes
+//! every tenth frame gives a valid 320×180 PNG (read back by the `png` crate's decoder), the same bytes
 //! when rendered again, with cloth in frame 30; `--color view` colours the cloth by its view
 //! factor; the sphere is drawn from a camera that sees it; bad input is refused in one line with
 //! exit code 2 and writes nothing.
 
-#[path = "support/png_decode.rs"]
-mod png_decode;
-
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 use std::sync::OnceLock;
 
+mod common;
+use common::{temp_dir, viewcloth};
+
 const CAMERA: &str = "cameras/sheet_on_sphere_pan.json";
-
-fn viewcloth(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_viewcloth")).args(args).output().expect("run viewcloth")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!("render_{name}"));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
 
 /// The simulated run, shared by the tests (each renders into its own copy).
 fn simulated() -> &'static Path {
@@ -71,14 +60,18 @@ fn previews(dir: &Path) -> Vec<String> {
     names
 }
 
-/// The RGB pixels of a 320×180 preview (as i32, to compare channels without overflow), after
-/// checking the file through and through.
+/// The RGB pixels of a 320×180 preview (as i32, to compare channels without overflow), read by
+/// the `png` crate's decoder (which checks every chunk's CRC and the zlib stream's Adler-32).
 fn pixels(path: &Path) -> Vec<[i32; 3]> {
-    let png = std::fs::read(path).unwrap();
-    let d = png_decode::decode(&png).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    assert_eq!((d.width, d.height), (320, 180), "{}", path.display());
-    let rgb = png_decode::rgb(&d).unwrap();
-    rgb.chunks(3).map(|p| [p[0], p[1], p[2]].map(i32::from)).collect()
+    let file = std::fs::File::open(path).unwrap();
+    let mut reader = png::Decoder::new(std::io::BufReader::new(file))
+        .read_info()
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let mut rgb = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut rgb).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert_eq!((info.width, info.height), (320, 180), "{}", path.display());
+    assert_eq!((info.color_type, info.bit_depth), (png::ColorType::Rgb, png::BitDepth::Eight));
+    rgb[..info.buffer_size()].chunks(3).map(|p| [p[0], p[1], p[2]].map(i32::from)).collect()
 }
 
 fn count(pixels: &[[i32; 3]], f: impl Fn(&[i32; 3]) -> bool) -> usize {

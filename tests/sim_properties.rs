@@ -4,6 +4,9 @@
 
 use std::path::{Path, PathBuf};
 
+mod common;
+
+use common::{temp_dir, Rng};
 use serde_json::{json, Value};
 use viewcloth::math::{Real, Vec3};
 use viewcloth::scene::{self, Scene};
@@ -151,11 +154,8 @@ fn deformed_free_sheet(scale: Real, damping: Real) -> Simulation {
     v["cloths"][0]["material"]["damping"] = json!(damping);
     let mut sim = Simulation::new(load(&v, "free_sheet")).unwrap();
     let pi = std::f64::consts::PI;
-    let mut seed: u64 = 12345;
-    let mut noise = move || {
-        seed = seed.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        ((seed >> 11) as Real / (1u64 << 53) as Real) - 0.5
-    };
+    let mut rng = Rng(12345);
+    let mut noise = move || rng.uniform() - 0.5;
     for n in sim.state.mesh.nodes.iter_mut() {
         let p = n.x;
         let (u, w) = (p.x + 0.5, p.y + 0.5);
@@ -278,13 +278,6 @@ fn determinism_scene() -> Value {
     v["frames"] = json!(8);
     v["wind"] = json!({ "velocity": [3.0, 1.0, -0.5], "density": 1.225, "drag": 0.05 });
     v
-}
-
-fn temp_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("viewcloth-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
 }
 
 /// Runs the CLI; returns the frame files (name, bytes) in name order.

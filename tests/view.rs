@@ -5,8 +5,10 @@
 //! view work (and `--mode view` without one is refused).
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
+mod common;
+
+use common::{temp_dir, viewcloth};
 use serde_json::Value;
 use viewcloth::camera::Camera;
 use viewcloth::io::obj::read_obj;
@@ -21,16 +23,6 @@ fn scene() -> PathBuf {
 
 fn camera() -> PathBuf {
     root().join("cameras/sheet_on_sphere_pan.json")
-}
-
-fn temp_dir(name: &str) -> PathBuf {
-    let d = Path::new(env!("CARGO_TARGET_TMPDIR")).join(name);
-    let _ = std::fs::remove_dir_all(&d);
-    d
-}
-
-fn viewcloth(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_viewcloth")).args(args).output().expect("run viewcloth")
 }
 
 fn simulate(out: &Path, extra: &[&str]) -> Value {
@@ -54,8 +46,9 @@ fn stages(stats: &Value) -> Vec<String> {
 fn the_mesh_follows_the_camera_and_costs_fewer_faces_than_adaptive() {
     let frames = "40";
     let cam_file = camera();
-    let view = simulate(&temp_dir("view_pan"), &["--frames", frames, "--camera", cam_file.to_str().unwrap()]);
-    let adaptive = simulate(&temp_dir("view_adaptive"), &["--frames", frames]);
+    let pan = temp_dir("pan");
+    let view = simulate(&pan, &["--frames", frames, "--camera", cam_file.to_str().unwrap()]);
+    let adaptive = simulate(&temp_dir("adaptive"), &["--frames", frames]);
     assert_eq!(view["mode"], "view");
     assert!(stages(&view).iter().any(|s| s == "view"), "{:?}", stages(&view));
     assert!(!stages(&adaptive).iter().any(|s| s == "view"), "no camera, no view factors: {:?}", stages(&adaptive));
@@ -70,7 +63,7 @@ fn the_mesh_follows_the_camera_and_costs_fewer_faces_than_adaptive() {
     let cam = Camera::load(&cam_file).unwrap();
     let t = fr.last().unwrap()["time"].as_f64().unwrap();
     let v = cam.view_at(t);
-    let obj = read_obj(&temp_dir_path("view_pan").join(format!("frame_{frames:0>4}.obj"))).unwrap();
+    let obj = read_obj(&pan.join(format!("frame_{frames:0>4}.obj"))).unwrap();
     let (mut inside, mut outside) = (Vec::new(), Vec::new());
     for tri in &obj.triangles {
         let x = tri.map(|c| obj.positions[c.v]);
@@ -90,17 +83,12 @@ fn the_mesh_follows_the_camera_and_costs_fewer_faces_than_adaptive() {
     assert!(ao > 2.0 * ai, "mean face area out of frame {ao} vs in frame {ai}");
 }
 
-/// `temp_dir` without clearing it.
-fn temp_dir_path(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_TARGET_TMPDIR")).join(name)
-}
-
 #[test]
 fn view_mode_gives_the_same_bits_on_one_and_two_threads() {
     let cam = camera();
     let cam = cam.to_str().unwrap();
-    let a = temp_dir("view_t1");
-    let b = temp_dir("view_t2");
+    let a = temp_dir("t1");
+    let b = temp_dir("t2");
     simulate(&a, &["--frames", "6", "--camera", cam, "--threads", "1"]);
     simulate(&b, &["--frames", "6", "--camera", cam, "--threads", "2"]);
     for f in 0..=6 {
@@ -113,9 +101,9 @@ fn view_mode_gives_the_same_bits_on_one_and_two_threads() {
 fn a_resumed_view_run_matches_an_uninterrupted_one() {
     let cam = camera();
     let cam = cam.to_str().unwrap();
-    let whole = temp_dir("view_whole");
+    let whole = temp_dir("whole");
     simulate(&whole, &["--frames", "6", "--camera", cam]);
-    let parts = temp_dir("view_parts");
+    let parts = temp_dir("parts");
     simulate(&parts, &["--frames", "3", "--camera", cam, "--checkpoint-every", "3"]);
     let o = viewcloth(&["resume", parts.to_str().unwrap(), "--frames", "6", "--quiet"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -133,8 +121,7 @@ fn check_validates_camera_files() {
     let cam = camera();
     let o = viewcloth(&["check", cam.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let dir = temp_dir("view_bad_camera");
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = temp_dir("bad_camera");
     let bad = dir.join("cam.json");
     let text = std::fs::read_to_string(&cam).unwrap().replacen("\"fov\": 25", "\"fov\": 180", 1);
     std::fs::write(&bad, text).unwrap();
@@ -147,7 +134,7 @@ fn check_validates_camera_files() {
 
 #[test]
 fn view_mode_without_a_camera_is_refused_in_one_line() {
-    let out = temp_dir("view_no_camera");
+    let out = temp_dir("no_camera").join("out");
     let scene = scene();
     let o = viewcloth(&["simulate", scene.to_str().unwrap(), "--mode", "view", "--out", out.to_str().unwrap()]);
     assert_eq!(o.status.code(), Some(2));
@@ -157,8 +144,7 @@ fn view_mode_without_a_camera_is_refused_in_one_line() {
     assert!(!out.exists(), "nothing is written");
 
     // The same from a scene file that asks for view mode.
-    let dir = temp_dir("view_scene_mode");
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = temp_dir("scene_mode");
     let text = std::fs::read_to_string(&scene).unwrap().replace("\"mode\": \"adaptive\"", "\"mode\": \"view\"");
     let file = dir.join("scene.json");
     std::fs::write(&file, text).unwrap();

@@ -1,6 +1,8 @@
 //! The comparison as a Markdown table and as an error-against-time plot (SVG: text needs no font
-//! files, and any browser or image viewer shows it).
+//! files, and any browser or image viewer shows it). Text that comes from outside (the scene's
+//! name, run names) is escaped in the SVG.
 
+use std::borrow::Cow;
 use std::fmt::Write;
 
 use super::{CompareReport, RunReport};
@@ -88,7 +90,7 @@ pub fn svg_plot(r: &CompareReport) -> String {
         s,
         r#"<text x="{}" y="25" text-anchor="middle">{}: error against run time, {} frames</text>"#,
         w / 2.0,
-        r.scene,
+        xml_escape(&r.scene),
         r.frames
     );
     for k in (lt0.ceil() as i32)..=(lt1.floor() as i32) {
@@ -109,8 +111,74 @@ pub fn svg_plot(r: &CompareReport) -> String {
     for (run, t, e) in points.iter().filter(|p| p.0.name != "floor") {
         let (cx, cy) = (x(*t), y(*e));
         let _ = writeln!(s, r#"<circle cx="{cx:.1}" cy="{cy:.1}" r="5" fill="steelblue"/>"#);
-        let _ = writeln!(s, r#"<text x="{cx:.1}" y="{:.1}" text-anchor="middle">{}</text>"#, cy - 10.0, run.name);
+        let _ = writeln!(
+            s,
+            r#"<text x="{cx:.1}" y="{:.1}" text-anchor="middle">{}</text>"#,
+            cy - 10.0,
+            xml_escape(&run.name)
+        );
     }
     s.push_str("</svg>\n");
     s
+}
+
+/// `text` with the five characters XML reserves replaced by their entities (XML 1.0 §2.4), for
+/// element content and attribute values alike.
+fn xml_escape(text: &str) -> Cow<'_, str> {
+    if !text.contains(['&', '<', '>', '"', '\'']) {
+        return Cow::Borrowed(text);
+    }
+    let mut out = String::with_capacity(text.len() + 16);
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&apos;"),
+            c => out.push(c),
+        }
+    }
+    Cow::Owned(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use std::path::PathBuf;
+
+    use super::*;
+    use crate::compare::Errors;
+
+    fn run(name: &str, wall_s: Real, normal_deg: Real) -> RunReport {
+        let mut errors = Errors::default();
+        errors.visible.normal_deg = normal_deg;
+        RunReport { name: name.into(), dir: PathBuf::from(name), wall_s, mean_faces: 100.0, errors: Some(errors) }
+    }
+
+    #[test]
+    fn escapes_the_five_reserved_characters() {
+        assert_eq!(xml_escape("plain name"), "plain name");
+        assert_eq!(xml_escape(r#"a<b & "c" > 'd'"#), "a&lt;b &amp; &quot;c&quot; &gt; &apos;d&apos;");
+    }
+
+    /// A scene and a run named with XML's reserved characters give a well-formed SVG whose
+    /// text reads back as the names.
+    #[test]
+    fn names_with_markup_give_well_formed_svg() {
+        let scene = r#"a<b & "c""#;
+        let report = CompareReport {
+            scene: scene.into(),
+            frames: 12,
+            image: [320, 180],
+            reference: RunReport { errors: None, ..run("reference", 30.0, 0.0) },
+            floor: Some(run("floor", 31.0, 0.5)),
+            modes: vec![run("adaptive", 3.0, 2.0), run("it's <odd> & \"new\"", 1.0, 4.0)],
+        };
+        let svg = svg_plot(&report);
+        let doc = roxmltree::Document::parse(&svg).unwrap_or_else(|e| panic!("{e}\n{svg}"));
+        let texts: Vec<&str> = doc.descendants().filter(|n| n.has_tag_name("text")).filter_map(|n| n.text()).collect();
+        assert!(texts.contains(&format!("{scene}: error against run time, 12 frames").as_str()), "{texts:?}");
+        assert!(texts.contains(&"it's <odd> & \"new\""), "{texts:?}");
+        assert!(texts.contains(&"adaptive") && texts.contains(&"reference"), "{texts:?}");
+    }
 }

@@ -50,11 +50,6 @@ pub fn cross2(a: &Vec2, b: &Vec2) -> Real {
     a.x * b.y - a.y * b.x
 }
 
-/// True when every component is finite.
-pub fn all_finite(v: &[Vec3]) -> bool {
-    v.iter().all(|p| p.iter().all(|c| c.is_finite()))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

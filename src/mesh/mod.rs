@@ -157,8 +157,4 @@ impl Mesh {
     pub fn positions(&self) -> Vec<Vec3> {
         self.nodes.iter().map(|n| n.x).collect()
     }
-
-    pub fn velocities(&self) -> Vec<Vec3> {
-        self.nodes.iter().map(|n| n.v).collect()
-    }
 }

@@ -4,20 +4,10 @@
 use super::ops;
 use super::work::Work;
 use super::*;
+use crate::math::test_rng::Rng;
 use crate::math::{Mat2, Vec2, Vec3};
 use crate::mesh::{rectangle, Mesh};
 use crate::sizing::{face_metrics, vertex_metrics, Combine, SizingParams};
-
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() * n as f64) as usize % n.max(1)
-    }
-}
 
 fn total_area(m: &Mesh) -> f64 {
     (0..m.faces.len()).map(|f| m.material_area(f)).sum()
@@ -40,7 +30,7 @@ fn random_operations_keep_the_mesh_valid() {
         for (i, v) in mesh.verts.iter_mut().enumerate() {
             let (x, y) = (v.u.x, v.u.y);
             if x > 1e-9 && x < 1.0 - 1e-9 && y > 1e-9 && y < 0.7 - 1e-9 {
-                v.u += Vec2::new(0.03 * (rng.next() - 0.5), 0.03 * (rng.next() - 0.5));
+                v.u += Vec2::new(0.03 * (rng.uniform() - 0.5), 0.03 * (rng.uniform() - 0.5));
             }
             let u = v.u;
             mesh.nodes[i].x = Vec3::new(u.x, u.y, 0.05 * (3.0 * u.x).sin());

@@ -125,6 +125,7 @@ pub fn tensor_max(ms: &[Mat2]) -> Mat2 {
 mod tests {
     use super::*;
     use crate::math::eigen_sym2;
+    use crate::math::test_rng::Rng;
 
     fn psd(m: &Mat2) -> bool {
         eigen_sym2(m).0[0] >= -1e-9 * (1.0 + m.norm())
@@ -145,11 +146,8 @@ mod tests {
 
     #[test]
     fn random_sets_dominated_minimally() {
-        let mut s = 3u64;
-        let mut rnd = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (s >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rng = Rng(3);
+        let mut rnd = || rng.uniform();
         for _ in 0..200 {
             let ms: Vec<Mat2> = (0..4)
                 .map(|_| {

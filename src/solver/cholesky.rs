@@ -101,11 +101,6 @@ impl Cholesky {
         let rhs_mat = MatMut::from_column_major_slice_mut(rhs, n, 1);
         llt.solve_in_place_with_conj(Conj::No, rhs_mat, Par::Seq, MemStack::new(&mut self.buffer));
     }
-
-    /// Number of stored values in the factor (a measure of fill).
-    pub fn factor_nnz(&self) -> usize {
-        self.symbolic.len_val()
-    }
 }
 
 /// P A Pᵀ's pattern exactly as faer's `factorize_numeric_llt` lays it out (a counting sort

@@ -37,9 +37,4 @@ impl ImplicitSystem {
         let values = vec![0.0; csc.row_idx.len()];
         Ok(ImplicitSystem { pattern, chol, blocks, rhs, values })
     }
-
-    /// Number of nonzeros of the Cholesky factor.
-    pub fn factor_nnz(&self) -> usize {
-        self.chol.factor_nnz()
-    }
 }

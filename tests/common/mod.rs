@@ -1,44 +1,38 @@
-//! Shared by the test crates that check derivatives against finite differences.
+//! Shared by the integration tests (`mod common;`): the binary, fresh temporary directories, the
+//! deterministic random generator of the unit tests, scenes given inline, finite-difference
+//! checks.
+#![allow(dead_code)]
 
-use nalgebra::{SMatrix, SVector};
-use viewcloth::math::Real;
+pub mod fd;
 
-pub fn max_abs<const R: usize, const C: usize>(m: &SMatrix<Real, R, C>) -> Real {
-    m.iter().fold(0.0, |a, b| a.max(b.abs()))
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+// For the generator's module, which takes them from its parent (as in `src/math`).
+use viewcloth::math::{Real, Vec3};
+use viewcloth::scene::{self, Scene};
+
+/// One generator for unit and integration tests: the unit tests' file, compiled here too.
+#[path = "../../src/math/test_rng.rs"]
+mod test_rng;
+#[allow(unused_imports)] // for the crates that draw no random numbers
+pub use test_rng::Rng;
+
+/// The binary run with `args`.
+pub fn viewcloth(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_viewcloth")).args(args).output().expect("run viewcloth")
 }
 
-/// Central-difference errors of an element kernel `f(x) = (energy, gradient, Hessian)` at `x`,
-/// one per step in `steps`: the gradient against differences of the energy, the Hessian against
-/// differences of the gradient (max abs entry).
-pub struct FdErrors<const N: usize> {
-    pub gradient: Vec<Real>,
-    pub hessian: Vec<Real>,
-    /// The kernel's own gradient and Hessian at `x`.
-    pub g: SVector<Real, N>,
-    pub h: SMatrix<Real, N, N>,
+/// A fresh, empty directory `<crate>_<name>` under the test target's temporary directory (the
+/// test crate's name keeps crates run in parallel apart).
+pub fn temp_dir(name: &str) -> PathBuf {
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("{}_{name}", env!("CARGO_CRATE_NAME")));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap_or_else(|e| panic!("{}: {e}", d.display()));
+    d
 }
 
-pub fn fd_errors<const N: usize>(
-    x: &SVector<Real, N>,
-    steps: impl IntoIterator<Item = Real>,
-    f: impl Fn(&SVector<Real, N>) -> (Real, SVector<Real, N>, SMatrix<Real, N, N>),
-) -> FdErrors<N> {
-    let (_, g, h) = f(x);
-    let (mut gradient, mut hessian) = (Vec::new(), Vec::new());
-    for eps in steps {
-        let mut g_fd = SVector::<Real, N>::zeros();
-        let mut h_fd = SMatrix::<Real, N, N>::zeros();
-        for i in 0..N {
-            let (mut xp, mut xm) = (*x, *x);
-            xp[i] += eps;
-            xm[i] -= eps;
-            let (ep, gp, _) = f(&xp);
-            let (em, gm, _) = f(&xm);
-            g_fd[i] = (ep - em) / (2.0 * eps);
-            h_fd.set_column(i, &((gp - gm) / (2.0 * eps)));
-        }
-        gradient.push(max_abs(&(g_fd - g)));
-        hessian.push(max_abs(&(h_fd - h)));
-    }
-    FdErrors { gradient, hessian, g, h }
+/// A scene given inline as JSON, named `name`; relative paths resolve in `base`.
+pub fn inline_scene(v: &serde_json::Value, base: &Path, name: &str) -> Scene {
+    scene::load_str(&v.to_string(), Path::new(name), base, name).unwrap_or_else(|e| panic!("{e}"))
 }
