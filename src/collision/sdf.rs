@@ -15,6 +15,7 @@ use std::collections::HashMap;
 
 use rayon::prelude::*;
 
+use super::bvh::{Aabb, Bvh};
 use super::geometry::closest_point_triangle;
 use crate::math::{Real, Vec3};
 
@@ -48,7 +49,7 @@ pub struct MeshSdf {
     face_normal: Vec<Vec3>,
     edge_normal: Vec<Vec3>,
     vert_normal: Vec<Vec3>,
-    tree: Tree,
+    tree: Bvh,
 }
 
 impl MeshSdf {
@@ -90,10 +91,10 @@ impl MeshSdf {
             vert_interior,
             face_normal: Vec::new(),
             vert_normal: Vec::new(),
-            tree: Tree::default(),
+            tree: Bvh::default(),
         };
         sdf.compute_normals();
-        sdf.tree = Tree::build(&sdf.triangle_boxes());
+        sdf.tree = Bvh::build(&sdf.triangle_boxes());
         sdf
     }
 
@@ -123,7 +124,8 @@ impl MeshSdf {
     pub fn query(&self, p: &Vec3) -> Option<SdfHit> {
         let (tri, c) = self.tree.nearest(p, |f| {
             let [a, b, d] = self.triangles[f].map(|i| &self.x[i]);
-            closest_point_triangle(p, a, b, d)
+            let c = closest_point_triangle(p, a, b, d);
+            (c.dist, c)
         })?;
         let n = self.pseudo_normal(tri, &c.bary);
         let side = (p - c.point).dot(&n);
@@ -221,149 +223,6 @@ impl MeshSdf {
 
     fn triangle_boxes(&self) -> Vec<Aabb> {
         self.triangles.iter().map(|t| Aabb::from_points(t.iter().map(|&i| &self.x[i]))).collect()
-    }
-}
-
-#[derive(Clone, Copy, Debug)]
-struct Aabb {
-    min: Vec3,
-    max: Vec3,
-}
-
-impl Aabb {
-    fn from_points<'a>(pts: impl IntoIterator<Item = &'a Vec3>) -> Self {
-        let mut b = Aabb { min: Vec3::repeat(Real::INFINITY), max: Vec3::repeat(Real::NEG_INFINITY) };
-        for p in pts {
-            b.min = b.min.inf(p);
-            b.max = b.max.sup(p);
-        }
-        b
-    }
-
-    fn merge(&self, o: &Aabb) -> Aabb {
-        Aabb { min: self.min.inf(&o.min), max: self.max.sup(&o.max) }
-    }
-
-    fn distance_squared(&self, p: &Vec3) -> Real {
-        (0..3).map(|k| (self.min[k] - p[k]).max(p[k] - self.max[k]).max(0.0).powi(2)).sum()
-    }
-}
-
-const LEAF_SIZE: usize = 4;
-
-#[derive(Clone, Debug)]
-struct TreeNode {
-    aabb: Aabb,
-    /// Leaf (count > 0): triangles `order[start..start + count]`; inner: children left, right.
-    start: u32,
-    count: u32,
-    left: u32,
-    right: u32,
-}
-
-/// An AABB tree over triangles for nearest-point queries. Parents precede children, so a
-/// reverse sweep refits bottom-up.
-#[derive(Clone, Debug, Default)]
-struct Tree {
-    nodes: Vec<TreeNode>,
-    order: Vec<u32>,
-}
-
-impl Tree {
-    /// Median split along the longest axis of the box centres.
-    fn build(boxes: &[Aabb]) -> Self {
-        let mut tree = Tree {
-            nodes: Vec::with_capacity(2 * boxes.len() / LEAF_SIZE + 1),
-            order: (0..boxes.len() as u32).collect(),
-        };
-        if !boxes.is_empty() {
-            tree.build_node(boxes, 0, boxes.len());
-        }
-        tree
-    }
-
-    fn build_node(&mut self, boxes: &[Aabb], start: usize, end: usize) -> u32 {
-        let id = self.nodes.len() as u32;
-        let items = &self.order[start..end];
-        let aabb = items.iter().map(|&i| boxes[i as usize]).reduce(|a, b| a.merge(&b)).expect("non-empty range");
-        self.nodes.push(TreeNode { aabb, start: start as u32, count: (end - start) as u32, left: 0, right: 0 });
-        if end - start <= LEAF_SIZE {
-            return id;
-        }
-        let centre = |i: u32| (boxes[i as usize].min + boxes[i as usize].max) * 0.5;
-        let c = Aabb::from_points(&items.iter().map(|&i| centre(i)).collect::<Vec<_>>());
-        let ext = c.max - c.min;
-        let axis = ext.imax();
-        let mid = (start + end) / 2;
-        self.order[start..end]
-            .select_nth_unstable_by(mid - start, |&a, &b| centre(a)[axis].total_cmp(&centre(b)[axis]).then(a.cmp(&b)));
-        let left = self.build_node(boxes, start, mid);
-        let right = self.build_node(boxes, mid, end);
-        let n = &mut self.nodes[id as usize];
-        (n.count, n.left, n.right) = (0, left, right);
-        id
-    }
-
-    fn refit(&mut self, boxes: &[Aabb]) {
-        for i in (0..self.nodes.len()).rev() {
-            let n = &self.nodes[i];
-            let aabb = if n.count > 0 {
-                let range = n.start as usize..(n.start + n.count) as usize;
-                self.order[range]
-                    .iter()
-                    .map(|&t| boxes[t as usize])
-                    .reduce(|a, b| a.merge(&b))
-                    .expect("leaves are non-empty")
-            } else {
-                self.nodes[n.left as usize].aabb.merge(&self.nodes[n.right as usize].aabb)
-            };
-            self.nodes[i].aabb = aabb;
-        }
-    }
-
-    fn root_box(&self) -> Option<Aabb> {
-        self.nodes.first().map(|n| n.aabb)
-    }
-
-    /// The triangle nearest to `p` under `closest(triangle)`, visiting nearer boxes first and
-    /// pruning boxes farther than the best so far. Ties keep the first found (deterministic).
-    fn nearest(
-        &self,
-        p: &Vec3,
-        closest: impl Fn(usize) -> super::geometry::TriangleClosest,
-    ) -> Option<(usize, super::geometry::TriangleClosest)> {
-        let mut best: Option<(usize, super::geometry::TriangleClosest)> = None;
-        let mut best_d2 = Real::INFINITY;
-        let mut stack: Vec<(u32, Real)> = Vec::with_capacity(64);
-        if let Some(root) = self.nodes.first() {
-            stack.push((0, root.aabb.distance_squared(p)));
-        }
-        while let Some((i, d2)) = stack.pop() {
-            if d2 >= best_d2 {
-                continue;
-            }
-            let n = &self.nodes[i as usize];
-            if n.count > 0 {
-                for &t in &self.order[n.start as usize..(n.start + n.count) as usize] {
-                    let c = closest(t as usize);
-                    if c.dist * c.dist < best_d2 {
-                        best_d2 = c.dist * c.dist;
-                        best = Some((t as usize, c));
-                    }
-                }
-                continue;
-            }
-            let (l, r) = (n.left, n.right);
-            let (dl, dr) =
-                (self.nodes[l as usize].aabb.distance_squared(p), self.nodes[r as usize].aabb.distance_squared(p));
-            // Push the farther child first so the nearer is popped next.
-            if dl <= dr {
-                stack.extend([(r, dr), (l, dl)]);
-            } else {
-                stack.extend([(l, dl), (r, dr)]);
-            }
-        }
-        best
     }
 }
 
