@@ -1,5 +1,6 @@
-//! Signed distance from points to an obstacle's triangle mesh: nearest triangle through an AABB
-//! tree, sign from angle-weighted pseudo-normals (Bærentzen & Aanæs 2005).
+//! Signed distance from points to an obstacle's triangle mesh: nearest triangle through the
+//! collision stages' AABB tree (`bvh::Bvh::nearest`), sign from angle-weighted pseudo-normals
+//! (Bærentzen & Aanæs 2005).
 //!
 //! The closest point lies in a face, on an edge or at a vertex of its triangle; the sign of
 //! (p − c) · n, with n that feature's pseudo-normal (face normal; sum of the two face normals for
@@ -10,6 +11,18 @@
 //!
 //! Queries are independent, so `query_all` runs them with rayon and returns the same bits
 //! whatever the thread count.
+//!
+//! Ties: when several triangles are at the same distance (a point nearest an edge or a vertex
+//! is as near to every triangle sharing it), the answer is the first such triangle in the tree's
+//! best-first order (`Bvh::nearest`); the closest points the triangles compute for a shared edge
+//! can differ in the last bit, and so can the answer. That order depends on the tree's shape,
+//! which the median split takes from the positions it is built on. So `update` rebuilds the tree
+//! rather than refitting it: a tree built once and refitted answers like a fresh one for a body
+//! that only translates, but not for one that rotates. Measured on `skirt_mannequin` (rotating
+//! capsules), frames 0–3: 1118 of 33504 cloth-node queries got a closest point or normal that
+//! differed in the last bits (5487 another triangle) when the hips' tree was built at t = 0 and
+//! refitted instead of built at t. A rebuild answers exactly as `new` at the same positions,
+//! whenever the field was first built (a resumed run answers as the uninterrupted one).
 
 use std::collections::HashMap;
 
@@ -98,13 +111,14 @@ impl MeshSdf {
         sdf
     }
 
-    /// New vertex positions for the same triangles: pseudo-normals recomputed, tree refitted.
+    /// New vertex positions for the same triangles: the topology (edges, manifold flags) is
+    /// kept, the pseudo-normals are recomputed and the tree is rebuilt, not refitted, so that every
+    /// answer, ties included, is bit for bit that of `new` on these positions (module doc).
     pub fn update(&mut self, positions: &[Vec3]) {
         assert_eq!(positions.len(), self.x.len(), "MeshSdf::update: vertex count changed");
         self.x.copy_from_slice(positions);
         self.compute_normals();
-        let boxes = self.triangle_boxes();
-        self.tree.refit(&boxes);
+        self.tree = Bvh::build(&self.triangle_boxes());
     }
 
     /// True when every edge has exactly two faces (the sign is then BA05's everywhere).

@@ -11,7 +11,6 @@ pub mod timers;
 pub use run::{resume, run, run_with_checkpoints, CheckpointOptions, ResumeOptions, RunError, RunOptions};
 
 use crate::collision::obstacle::ObstacleBody;
-use crate::collision::sdf::MeshSdf;
 use crate::collision::world::{CollisionCounters, CollisionWorld};
 use crate::forces::membrane::{deformation_gradient, max_principal_strain};
 use crate::forces::RestState;
@@ -131,11 +130,10 @@ impl Simulation {
         let th = world.params.thickness;
         let tol = tolerance.unwrap_or(Real::INFINITY);
         let mut pushed = 0;
-        for (b, body) in world.bodies.iter().enumerate() {
-            let sdf = MeshSdf::new(body.triangles(), &body.positions_at(self.time));
+        for b in 0..world.bodies.len() {
             let mut too_deep = vec![0usize; self.scene.cloths.len()];
             let mut moves = Vec::new();
-            let inside = sdf.query_inside(&self.mesh.positions());
+            let inside = world.with_sdf(b, self.time, |sdf| sdf.query_inside(&self.mesh.positions()));
             for (i, (node, q)) in self.mesh.nodes.iter().zip(inside).enumerate() {
                 let Some(q) = q else { continue };
                 if -q.distance > tol {
@@ -183,13 +181,8 @@ impl Simulation {
     pub fn penetrations(&self) -> usize {
         let Some(world) = &self.collisions else { return 0 };
         let x = self.mesh.positions();
-        world
-            .bodies
-            .iter()
-            .map(|body| {
-                MeshSdf::new(body.triangles(), &body.positions_at(self.time))
-                    .count_deeper_than(&x, 0.5 * world.params.thickness)
-            })
+        (0..world.bodies.len())
+            .map(|b| world.with_sdf(b, self.time, |sdf| sdf.count_deeper_than(&x, 0.5 * world.params.thickness)))
             .sum()
     }
 
