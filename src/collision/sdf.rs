@@ -241,6 +241,9 @@ impl MeshSdf {
 }
 
 #[cfg(test)]
+mod parry_oracle;
+
+#[cfg(test)]
 mod tests {
     use super::*;
     use crate::collision::obstacle::{box_mesh, capsule_mesh, plane_mesh, sphere_mesh, CHORDAL_TOLERANCE};
