@@ -6,6 +6,11 @@
 //! near the surface and over the mesh's box; and how many of parry's answers differ from ours in
 //! their bits (adopting parry would change the simulation's results by that much).
 //!
+//! A second table prices the cache of `CollisionWorld::with_sdf` at one call site: a
+//! penetration count (every cloth node against every obstacle body) as the simulation made it
+//! before, with a field built from scratch per body, against the kept fields, at a time they
+//! already hold and at a new time (moving bodies brought to it, static ones untouched).
+//!
 //! `cargo bench --bench sdf`
 
 use std::path::Path;
@@ -18,10 +23,11 @@ use viewcloth::collision::obstacle::{sphere_mesh, ObstacleBody};
 use viewcloth::collision::sdf::MeshSdf;
 use viewcloth::math::{Real, Vec3};
 use viewcloth::scene::load_file;
+use viewcloth::sim::Simulation;
 
 /// Query points per mesh, and repetitions of each timing (the median is reported).
 const POINTS: usize = 40_000;
-const REPEAT: usize = 5;
+const REPEAT: usize = 9;
 
 fn to_parry(v: &Vec3) -> Vector {
     Vector::new(v.x, v.y, v.z)
@@ -146,6 +152,43 @@ fn scene_body(file: &Path, t: Real) -> Option<(String, Vec<[usize; 3]>, Vec<Vec3
     Some((name, body.triangles().to_vec(), body.positions_at(0.0), body.positions_at(t)))
 }
 
+/// One penetration count over every body of a scene (`Simulation::penetrations`), fresh
+/// fields per call against kept ones, in ms per call; the scene's cloth after `frames` frames.
+fn cache(file: &Path, frames: usize) {
+    let Some(mut sim) = load_file(file).ok().and_then(|s| Simulation::new(s).ok()) else {
+        return eprintln!("skipped {}", file.display());
+    };
+    for f in 1..=frames {
+        sim.advance_frame().unwrap_or_else(|e| panic!("{}, frame {f}: {e}", file.display()));
+    }
+    let world = sim.collisions.as_ref().expect("a scene with obstacles");
+    let (x, depth) = (sim.mesh.positions(), 0.5 * world.params.thickness);
+    let bodies = 0..world.bodies.len();
+    let fresh = time(|| {
+        for body in &world.bodies {
+            std::hint::black_box(MeshSdf::new(body.triangles(), &body.positions_at(1.0)).count_deeper_than(&x, depth));
+        }
+    });
+    let count =
+        |t: Real| bodies.clone().map(|b| world.with_sdf(b, t, |sdf| sdf.count_deeper_than(&x, depth))).sum::<usize>();
+    let same = time(|| drop(std::hint::black_box(count(1.0))));
+    let mut t = 1.0;
+    let moved = time(|| {
+        t += 0.1;
+        std::hint::black_box(count(t));
+    });
+    let statics = world.bodies.iter().filter(|b| b.is_static()).count();
+    let name = file.file_stem().map_or(String::new(), |s| s.to_string_lossy().into_owned());
+    println!(
+        "| {name} | {} ({statics} static) | {} | {:.2} | {:.2} | {:.2} |",
+        world.bodies.len(),
+        x.len(),
+        1e3 * fresh,
+        1e3 * same,
+        1e3 * moved
+    );
+}
+
 fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     eprintln!("nearest-point benchmark: {POINTS} points per mesh, median of {REPEAT}, one thread");
@@ -167,4 +210,16 @@ fn main() {
     let (x, tris) = sphere_mesh(0.5, 2e-4);
     let moved: Vec<Vec3> = x.iter().map(|p| p + Vec3::new(0.01, 0.02, 0.0)).collect();
     bench("fine icosphere", &tris, &x, &moved);
+
+    println!();
+    println!("| scene | bodies | cloth nodes | fresh fields ms | kept, same time ms | kept, new time ms |");
+    println!("|---|---:|---:|---:|---:|---:|");
+    // ARCSim's sheet starts as four triangles and is refined over its first frames.
+    for (file, frames) in [
+        ("scenes/skirt_mannequin.json", 0),
+        ("scenes/tablecloth_pull.json", 0),
+        ("../shared/arcsim/conf/sphere.json", 5),
+    ] {
+        cache(&root.join(file), frames);
+    }
 }
