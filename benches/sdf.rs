@@ -104,11 +104,10 @@ fn bench(name: &str, tris: &[[usize; 3]], x: &[Vec3], moved: &[Vec3]) {
     let (near, spread): (Vec<Vec3>, Vec<Vec3>) =
         (pts.iter().step_by(2).copied().collect(), pts.iter().skip(1).step_by(2).copied().collect());
     let per_query = |set: &[Vec3]| {
-        let a = time(|| set.iter().for_each(|q| drop(std::hint::black_box(ours.query(q)))));
+        let a = time(|| set.iter().for_each(|q| _ = std::hint::black_box(ours.query(q))));
         let b = time(|| {
-            set.iter().for_each(|q| {
-                drop(std::hint::black_box(parry.project_local_point_and_get_location(to_parry(q), false)))
-            })
+            set.iter()
+                .for_each(|q| _ = std::hint::black_box(parry.project_local_point_and_get_location(to_parry(q), false)))
         });
         (a / set.len() as f64, b / set.len() as f64)
     };
@@ -143,13 +142,21 @@ fn bench(name: &str, tris: &[[usize; 3]], x: &[Vec3], moved: &[Vec3]) {
     );
 }
 
+/// An obstacle's mesh at t = 0 and moved.
+struct Body {
+    name: String,
+    tris: Vec<[usize; 3]>,
+    x: Vec<Vec3>,
+    moved: Vec<Vec3>,
+}
+
 /// The first obstacle of a scene file, at t = 0 and at `t`.
-fn scene_body(file: &Path, t: Real) -> Option<(String, Vec<[usize; 3]>, Vec<Vec3>, Vec<Vec3>)> {
+fn scene_body(file: &Path, t: Real) -> Option<Body> {
     let scene = load_file(file).map_err(|e| eprintln!("skipped {}: {e}", file.display())).ok()?;
     let o = scene.obstacles.first()?;
     let body = ObstacleBody::new(o);
     let name = format!("{} ({})", o.name, file.file_stem()?.to_string_lossy());
-    Some((name, body.triangles().to_vec(), body.positions_at(0.0), body.positions_at(t)))
+    Some(Body { name, tris: body.triangles().to_vec(), x: body.positions_at(0.0), moved: body.positions_at(t) })
 }
 
 /// One penetration count over every body of a scene (`Simulation::penetrations`), fresh
@@ -171,7 +178,7 @@ fn cache(file: &Path, frames: usize) {
     });
     let count =
         |t: Real| bodies.clone().map(|b| world.with_sdf(b, t, |sdf| sdf.count_deeper_than(&x, depth))).sum::<usize>();
-    let same = time(|| drop(std::hint::black_box(count(1.0))));
+    let same = time(|| _ = std::hint::black_box(count(1.0)));
     let mut t = 1.0;
     let moved = time(|| {
         t += 0.1;
@@ -203,8 +210,8 @@ fn main() {
         (root.join("scenes/skirt_mannequin.json"), 1.0),
         (root.join("../shared/arcsim/conf/sphere.json"), 3.0),
     ] {
-        if let Some((name, tris, x, moved)) = scene_body(&file, t) {
-            bench(&name, &tris, &x, &moved);
+        if let Some(b) = scene_body(&file, t) {
+            bench(&b.name, &b.tris, &b.x, &b.moved);
         }
     }
     let (x, tris) = sphere_mesh(0.5, 2e-4);
