@@ -109,7 +109,8 @@ impl CollisionWorld {
     /// the body's first query and kept (topology, pseudo-normals, tree): a static body's is used
     /// as it is; a moving body's is brought to `t` (`MeshSdf::update`) when its positions there
     /// differ from those the field holds. The answers are bit for bit those of a `MeshSdf` built
-    /// from `positions_at(t)`.
+    /// from `positions_at(t)`. The body's field is locked while `f` runs: `f` must not ask for it
+    /// again.
     pub fn with_sdf<R>(&self, b: usize, t: Real, f: impl FnOnce(&MeshSdf) -> R) -> R {
         let body = &self.bodies[b];
         let mut slot = self.sdfs[b].lock().unwrap_or_else(|poisoned| {
