@@ -1,5 +1,7 @@
-//! Broad phase: a bounding volume hierarchy over axis-aligned boxes, refit every step and
-//! rebuilt when the primitive count changes. Queries return candidates in a deterministic order.
+//! The one bounding volume hierarchy of the collision stages: axis-aligned boxes, refit when the
+//! primitives move and rebuilt when their count changes. The broad phase queries it for
+//! overlapping boxes (one box, tree against tree, a tree against itself); the signed distance
+//! (`sdf`) for the primitive nearest a point. Queries return results in a deterministic order.
 
 use crate::math::{Real, Vec3};
 
@@ -43,6 +45,11 @@ impl Aabb {
             && o.min.y <= self.max.y
             && self.min.z <= o.max.z
             && o.min.z <= self.max.z
+    }
+
+    /// Squared distance from `p` to the box (0 inside).
+    pub fn distance_squared(&self, p: &Vec3) -> Real {
+        (0..3).map(|k| (self.min[k] - p[k]).max(p[k] - self.max[k]).max(0.0).powi(2)).sum()
     }
 
     fn center(&self) -> Vec3 {
@@ -122,6 +129,11 @@ impl Bvh {
         self.order.is_empty()
     }
 
+    /// The box of every primitive (`None` for an empty tree).
+    pub fn root_box(&self) -> Option<Aabb> {
+        self.nodes.first().map(|n| n.aabb)
+    }
+
     /// Refits the boxes for new primitive boxes (same primitives, same tree).
     pub fn refit(&mut self, boxes: &[Aabb]) {
         for i in (0..self.nodes.len()).rev() {
@@ -158,6 +170,49 @@ impl Bvh {
                 stack.push(n.left);
             }
         }
+    }
+
+    /// The primitive nearest to `p`, where `closest(i)` is primitive i's distance to `p` and what
+    /// the caller keeps of it: a best-first descent (nearer child box first, the left one when
+    /// both are as near), skipping every box no nearer than the best so far.
+    ///
+    /// Ties: a primitive replaces the best only when its squared distance is strictly smaller,
+    /// so among primitives at the same squared distance the first one visited in that order is
+    /// returned (and one whose box is no nearer than the best is never visited). The order is a
+    /// function of this tree's shape and boxes and of `p`: deterministic, independent of threads.
+    pub fn nearest<T>(&self, p: &Vec3, closest: impl Fn(usize) -> (Real, T)) -> Option<(usize, T)> {
+        let mut best: Option<(usize, T)> = None;
+        let mut best_d2 = Real::INFINITY;
+        let mut stack: Vec<(u32, Real)> = Vec::with_capacity(64);
+        if let Some(root) = self.nodes.first() {
+            stack.push((0, root.aabb.distance_squared(p)));
+        }
+        while let Some((i, d2)) = stack.pop() {
+            if d2 >= best_d2 {
+                continue;
+            }
+            let n = &self.nodes[i as usize];
+            if n.count > 0 {
+                for &t in &self.order[n.start as usize..(n.start + n.count) as usize] {
+                    let (d, c) = closest(t as usize);
+                    if d * d < best_d2 {
+                        best_d2 = d * d;
+                        best = Some((t as usize, c));
+                    }
+                }
+                continue;
+            }
+            let (l, r) = (n.left, n.right);
+            let (dl, dr) =
+                (self.nodes[l as usize].aabb.distance_squared(p), self.nodes[r as usize].aabb.distance_squared(p));
+            // The farther child is pushed first, so the nearer is popped next.
+            if dl <= dr {
+                stack.extend([(r, dr), (l, dl)]);
+            } else {
+                stack.extend([(l, dl), (r, dr)]);
+            }
+        }
+        best
     }
 
     /// Every pair (a, b), a from `self`, b from `other`, whose boxes overlap, sorted.

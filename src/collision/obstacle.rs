@@ -71,7 +71,8 @@ impl ObstacleBody {
         }
     }
 
-    /// True when the obstacle never moves or deforms (its broad phase need not be refit).
+    /// True when the obstacle never moves or deforms (its signed distance field, once built,
+    /// holds at every time: `CollisionWorld::with_sdf`).
     pub fn is_static(&self) -> bool {
         self.motion.is_none() && matches!(self.shape, LocalShape::Rigid(_))
     }

@@ -3,6 +3,11 @@
 //!
 //! Index space: cloth nodes are `0..n`; obstacle vertices follow, body after body, as fixed
 //! points `n + k` (infinite mass, prescribed motion).
+//!
+//! Each body's signed distance field is kept between queries (`with_sdf`): built at its first
+//! query, brought to a new time only when the body has moved.
+
+use std::sync::Mutex;
 
 use super::broad::{BroadPhase, Candidate, Interval, VF};
 use super::ccd::{edge_edge_ccd, vertex_face_ccd, Impact, CCD_TOLERANCE};
@@ -11,6 +16,7 @@ use super::impact_zones::{resolve_zone, ZoneConstraint, ZoneState};
 use super::obstacle::ObstacleBody;
 use super::params::CollisionParams;
 use super::proximity::{edge_edge_contact, node_face_contact, obstacle_edge_contact, obstacle_vertex_contact, Contact};
+use super::sdf::MeshSdf;
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
 
@@ -44,6 +50,14 @@ pub struct CollisionWorld {
     obs_normals: Vec<Vec3>,
     obs_edges: Vec<[usize; 2]>,
     broad: BroadPhase,
+    /// Per body, its signed distance field as of the last query (`with_sdf`); empty until then.
+    sdfs: Vec<Mutex<Option<BodySdf>>>,
+}
+
+/// A body's signed distance field and the time of the positions it holds.
+struct BodySdf {
+    time: Real,
+    sdf: MeshSdf,
 }
 
 impl CollisionWorld {
@@ -71,7 +85,9 @@ impl CollisionWorld {
             obs_normals: Vec::new(),
             obs_edges,
             broad: BroadPhase::default(),
+            sdfs: Vec::new(),
         };
+        w.sdfs = w.bodies.iter().map(|_| Mutex::new(None)).collect();
         w.obs_x1 = w.positions_at(t);
         w.obs_normals = w.obstacle_vertex_normals();
         w.obs_x0 = w.obs_x1.clone();
@@ -87,6 +103,35 @@ impl CollisionWorld {
         self.obs_x0 = self.positions_at(t0);
         self.obs_x1 = self.positions_at(t1);
         self.obs_normals = self.obstacle_vertex_normals();
+    }
+
+    /// Calls `f` with the signed distance field of body `b` at time `t`. The field is built at
+    /// the body's first query and kept (topology, pseudo-normals, tree): a static body's is used
+    /// as it is; a moving body's is brought to `t` (`MeshSdf::update`) when its positions there
+    /// differ from those the field holds. The answers are bit for bit those of a `MeshSdf` built
+    /// from `positions_at(t)`. The body's field is locked while `f` runs: `f` must not ask for it
+    /// again.
+    pub fn with_sdf<R>(&self, b: usize, t: Real, f: impl FnOnce(&MeshSdf) -> R) -> R {
+        let body = &self.bodies[b];
+        let mut slot = self.sdfs[b].lock().unwrap_or_else(|poisoned| {
+            // A panic during an update may have left the field half-way: start over.
+            self.sdfs[b].clear_poison();
+            let mut slot = poisoned.into_inner();
+            *slot = None;
+            slot
+        });
+        let cached = match slot.take() {
+            Some(c) if body.is_static() || c.time == t => c,
+            Some(mut c) => {
+                let x = body.positions_at(t);
+                if !same_bits(&x, c.sdf.positions()) {
+                    c.sdf.update(&x);
+                }
+                BodySdf { time: t, sdf: c.sdf }
+            }
+            None => BodySdf { time: t, sdf: MeshSdf::new(body.triangles(), &body.positions_at(t)) },
+        };
+        f(&slot.insert(cached).sdf)
     }
 
     /// Velocities of obstacle vertices over the current step of length `h`.
@@ -320,6 +365,11 @@ fn outside_obstacle(mut imp: Impact, nodes: &[usize; 4], n: usize, outward: &[Ve
     imp
 }
 
+/// Bitwise equality (a signed zero counts as a change).
+fn same_bits(a: &[Vec3], b: &[Vec3]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(p, q)| p.iter().zip(q.iter()).all(|(x, y)| x.to_bits() == y.to_bits()))
+}
+
 struct UnionFind {
     parent: Vec<usize>,
 }
@@ -340,6 +390,71 @@ impl UnionFind {
         if ra != rb {
             let (lo, hi) = (ra.min(rb), ra.max(rb));
             self.parent[hi] = lo;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collision::sdf::SdfHit;
+    use crate::collision::shape::{Obstacle, ObstacleShape};
+    use crate::math::motion::{Keyframe, Motion, Transform};
+    use crate::math::test_rng::Rng;
+
+    fn same_hit(a: &Option<SdfHit>, b: &Option<SdfHit>) -> bool {
+        match (a, b) {
+            (Some(a), Some(b)) => {
+                let bits = |v: &Vec3| v.map(Real::to_bits);
+                a.distance.to_bits() == b.distance.to_bits()
+                    && bits(&a.point) == bits(&b.point)
+                    && bits(&a.normal) == bits(&b.normal)
+                    && a.triangle == b.triangle
+                    && a.bary.map(Real::to_bits) == b.bary.map(Real::to_bits)
+            }
+            (None, None) => true,
+            _ => false,
+        }
+    }
+
+    /// The kept field of a rotating capsule and of a static box answers, bit for bit and ties
+    /// included, as a field built from scratch at each time, whatever the order of the times
+    /// (back in time, the same time twice). Half of the points are just off the bodies' edge
+    /// midpoints, where two triangles are about as near and the tree's order decides.
+    #[test]
+    fn kept_sdf_answers_as_a_fresh_one() {
+        let key = |time: Real, angle: Real| Keyframe {
+            time,
+            transform: Transform::new([0.1 * time, 0.0, 0.0], Some([angle, 1.0, 2.0, 0.5]), 1.0),
+        };
+        let capsule = Obstacle {
+            name: "capsule".into(),
+            shape: ObstacleShape::Capsule { radius: 0.2, length: 0.5 },
+            transform: Transform::default(),
+            motion: Some(Motion::new(vec![key(0.0, 0.0), key(1.0, 75.0)])),
+        };
+        let block = Obstacle {
+            name: "box".into(),
+            shape: ObstacleShape::Box { size: [0.3, 0.4, 0.5] },
+            transform: Transform::new([0.0, 0.0, 0.6], Some([30.0, 0.0, 0.0, 1.0]), 1.0),
+            motion: None,
+        };
+        let bodies: Vec<ObstacleBody> = [capsule, block].iter().map(ObstacleBody::new).collect();
+        let world = CollisionWorld::new(CollisionParams::default(), bodies, 0.0);
+        let mut rng = Rng(11);
+        for t in [0.0, 0.35, 0.35, 0.8, 0.1, 2.0] {
+            for (b, body) in world.bodies.iter().enumerate() {
+                let x = body.positions_at(t);
+                let mut pts: Vec<Vec3> = (0..400).map(|_| rng.vec() * 0.8).collect();
+                for tri in body.triangles() {
+                    let mid = 0.5 * (x[tri[0]] + x[tri[1]]);
+                    pts.push(mid + (mid - x[tri[2]]) * (0.02 * rng.uniform()));
+                }
+                let fresh = MeshSdf::new(body.triangles(), &x).query_all(&pts);
+                let kept = world.with_sdf(b, t, |sdf| sdf.query_all(&pts));
+                let differ = fresh.iter().zip(&kept).filter(|(f, k)| !same_hit(f, k)).count();
+                assert_eq!(differ, 0, "{}, t = {t}: {differ} of {} answers differ", body.name, pts.len());
+            }
         }
     }
 }

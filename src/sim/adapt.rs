@@ -6,7 +6,6 @@ use std::collections::HashMap;
 
 use std::time::Instant;
 
-use crate::collision::sdf::MeshSdf;
 use crate::math::{Mat2, Real};
 use crate::remesh::{remesh, Finished, RemeshLimits, RemeshStats};
 use crate::scene::RemeshMode;
@@ -57,9 +56,8 @@ impl Simulation {
         let range = OBSTACLE_RANGE * world.params.thickness;
         let x = self.state.mesh.positions();
         let mut best: Vec<Option<(Real, ObstaclePlane)>> = vec![None; x.len()];
-        for body in &world.bodies {
-            let sdf = MeshSdf::new(body.triangles(), &body.positions_at(self.state.time));
-            for (i, hit) in sdf.query_all(&x).into_iter().enumerate() {
+        for b in 0..world.bodies.len() {
+            for (i, hit) in world.with_sdf(b, self.state.time, |sdf| sdf.query_all(&x)).into_iter().enumerate() {
                 let Some(hit) = hit else { continue };
                 let d = hit.distance.abs();
                 if d < range && best[i].is_none_or(|(b, _)| d < b) {

@@ -17,7 +17,6 @@ pub use run::{resume, run, run_with_checkpoints, CheckpointOptions, ResumeOption
 pub use state::SimState;
 pub use workspace::Workspace;
 
-use crate::collision::sdf::MeshSdf;
 use crate::collision::world::CollisionWorld;
 use crate::error::InputError;
 use crate::forces::membrane::{deformation_gradient, max_principal_strain};
@@ -102,11 +101,10 @@ impl Simulation {
         let th = world.params.thickness;
         let tol = tolerance.unwrap_or(Real::INFINITY);
         let mut pushed = 0;
-        for (b, body) in world.bodies.iter().enumerate() {
-            let sdf = MeshSdf::new(body.triangles(), &body.positions_at(self.state.time));
+        for b in 0..world.bodies.len() {
             let mut too_deep = vec![0usize; self.scene.cloths.len()];
             let mut moves = Vec::new();
-            let inside = sdf.query_inside(&self.state.mesh.positions());
+            let inside = world.with_sdf(b, self.state.time, |sdf| sdf.query_inside(&self.state.mesh.positions()));
             for (i, (node, q)) in self.state.mesh.nodes.iter().zip(inside).enumerate() {
                 let Some(q) = q else { continue };
                 if -q.distance > tol {
@@ -142,13 +140,8 @@ impl Simulation {
     pub fn penetrations(&self) -> usize {
         let Some(world) = &self.ws.collisions else { return 0 };
         let x = self.state.mesh.positions();
-        world
-            .bodies
-            .iter()
-            .map(|body| {
-                MeshSdf::new(body.triangles(), &body.positions_at(self.state.time))
-                    .count_deeper_than(&x, 0.5 * world.params.thickness)
-            })
+        (0..world.bodies.len())
+            .map(|b| world.with_sdf(b, self.state.time, |sdf| sdf.count_deeper_than(&x, 0.5 * world.params.thickness)))
             .sum()
     }
 
