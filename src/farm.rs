@@ -83,8 +83,9 @@ echo "viewcloth: task $task (restart ${{SLURM_RESTART_COUNT:-0}}) on $(hostname)
 child=$!
 trap 'kill -TERM "$child" 2>/dev/null' TERM INT
 wait "$child"; rc=$?
-# wait returns early (status > 128) when the trap ran: wait for viewcloth itself.
-while kill -0 "$child" 2>/dev/null; do wait "$child"; rc=$?; done
+# wait returns early (status > 128) when the trap ran: wait for viewcloth itself (bash keeps its
+# status; 127 once it was taken).
+while [ "$rc" -gt 128 ]; do wait "$child"; next=$?; [ "$next" -eq 127 ] && break; rc=$next; done
 echo "viewcloth: task $task exit $rc at $(date -u +%FT%TZ)"
 if [ "$rc" -eq 75 ]; then
     echo "viewcloth: interrupted at a checkpoint; requeueing $task"
