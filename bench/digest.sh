@@ -6,8 +6,8 @@
 # Runs BIN (a viewcloth binary) on every shipped scene, the view shot, and ARCSim's sphere and
 # square (../shared/arcsim), a few frames each, with checkpoints and exported obstacles, then
 # prints one line per output file: its SHA-256, where stats.json has its timings (wall_s,
-# stage_s, total_wall_s) removed and a checkpoint is hashed up to its statistics (the state;
-# the statistics carry timings).
+# stage_s, total_wall_s) removed and a checkpoint is hashed without its statistics (they carry
+# timings) and without the absolute scene and camera paths (they name the checkout).
 set -euo pipefail
 bin=$(realpath "$1"); root=$2
 cd "$(dirname "$0")/.."
@@ -28,6 +28,20 @@ run arcsim_square 40 "$shared/conf/square.json"
 python3 - "$root" <<'PY'
 import hashlib, json, os, sys
 root = sys.argv[1]
+def checkpoint_state(b):
+    # Everything from the format version up to the statistics, less the run record's absolute
+    # scene and camera paths (they name the checkout): see src/sim/checkpoint.rs.
+    u64 = lambda o: int.from_bytes(b[o:o + 8], "little")
+    o = 8 + 4
+    o += 8 + u64(o)                      # writer's version
+    keep = b[8:o]
+    for tag_then_path in (True, False, True):
+        tag = b[o]; o += 1
+        keep += bytes([tag])
+        if tag_then_path and tag == 1:
+            o += 8 + u64(o)              # scene / camera path
+    end = b.rfind(b'{"scene"') - 8
+    return keep + b[o:end]
 def strip(o):
     if isinstance(o, dict):
         return {k: strip(v) for k, v in o.items() if k not in ("wall_s", "stage_s", "total_wall_s")}
@@ -43,6 +57,6 @@ for run in sorted(os.listdir(root)):
         if f == "stats.json":
             b = json.dumps(strip(json.loads(b)), sort_keys=True).encode()
         elif f.startswith("checkpoint_"):
-            b = b[: b.rfind(b'{"scene"') - 8]
+            b = checkpoint_state(b)
         print(hashlib.sha256(b).hexdigest()[:16], run + "/" + f)
 PY

@@ -210,4 +210,8 @@ pub struct RenderArgs {
     /// to red (1), obstacles grey.
     #[arg(long, default_value = "shade", value_parser = ["shade", "view"])]
     pub color: String,
+    /// Progress report: `bar`, `lines` (one stderr line per image) or `none` (default: a bar
+    /// on a terminal, lines otherwise).
+    #[arg(long, value_parser = ProgressMode::NAMES)]
+    pub progress: Option<String>,
 }

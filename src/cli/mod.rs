@@ -247,7 +247,8 @@ pub fn render(args: RenderArgs) -> Result<(), CliError> {
     let frames = args.frames.as_deref().map(parse_frames).transpose()?;
     let camera = Camera::load(&args.camera)?;
     let colouring = if args.color == "view" { Colouring::View } else { Colouring::Shade };
-    let opts = RenderOptions { width, height, frames, every: args.every as usize, colouring };
+    let progress = ProgressMode::choose(args.progress.as_deref(), false);
+    let opts = RenderOptions { width, height, frames, every: args.every as usize, colouring, progress };
     let n = render_run(&args.dir, &camera, &opts).map_err(|e| match e.is_input() {
         true => CliError::Input(e.to_string()),
         false => CliError::Run(e.to_string()),

@@ -320,7 +320,7 @@ impl Output<'_> {
         now: bool,
     ) -> Result<Option<PathBuf>, RunError> {
         let Some(record) = &self.record else { return Ok(None) };
-        let due = record.every > 0 && f > 0 && (f % record.every == 0 || f == last);
+        let due = record.every > 0 && f > 0 && (f.is_multiple_of(record.every) || f == last);
         if !due && !now {
             return Ok(None);
         }
