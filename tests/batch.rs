@@ -240,3 +240,60 @@ fn emit_slurm_writes_an_array_script_and_the_command_lines() {
     assert!(!dir.join("a").exists(), "--emit ran a shot");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 15: SIGTERM stops a batch at the end of the running shot's frame with a checkpoint
+/// (exit 75, the shot `interrupted` in the summary, no further shot started); the same batch
+/// again resumes it to frames identical to `simulate`'s.
+#[test]
+fn sigterm_stops_a_batch_and_the_rerun_resumes_it() {
+    let dir = temp_dir("sigterm");
+    let s = root().join("scenes");
+    let shots = format!(
+        r#"{{ "version": 1, "shots": [ {{ "scene": "{s}/hanging_sheet.json", "frames": 40, "out": "a" }},
+           {{ "scene": "{s}/flag_wind.json", "frames": 2, "out": "b" }} ] }}"#,
+        s = s.display()
+    );
+    let file = dir.join("shots.json");
+    std::fs::write(&file, shots).unwrap();
+    let (f, summary) = (file.to_str().unwrap(), dir.join("summary.json"));
+    let args = ["batch", f, "--summary", summary.to_str().unwrap(), "--threads", "1", "--progress", "lines"];
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_viewcloth"))
+        .args(args)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while !dir.join("a/frame_0005.obj").exists() {
+        assert!(start.elapsed().as_secs() < 120, "shot 0 did not reach frame 5");
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+    let pid = child.id().to_string();
+    assert!(std::process::Command::new("kill").args(["-TERM", &pid]).status().unwrap().success());
+    let o = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(75), "{err}");
+    assert!(err.contains("shot 0 (hanging_sheet): frame 5/40"), "no progress line of frame 5: {err}");
+    assert_eq!(summary_statuses(&summary), ["interrupted"]);
+    let sum: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&summary).unwrap()).unwrap();
+    assert_eq!((&sum["interrupted"], &sum["pending"]), (&serde_json::json!(1), &serde_json::json!(1)), "{sum}");
+    assert!(!dir.join("b").exists(), "shot 1 started after the signal");
+
+    let o = viewcloth(&args);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(summary_statuses(&summary), ["resumed", "done"]);
+    let alone = dir.join("a_alone");
+    let sheet = s.join("hanging_sheet.json");
+    let o = viewcloth(&[
+        "simulate",
+        sheet.to_str().unwrap(),
+        "--frames",
+        "40",
+        "--out",
+        alone.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(o.status.success());
+    assert!(frames_of(&dir.join("a")) == frames_of(&alone), "the resumed shot differs from simulate's");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -335,7 +335,9 @@ pub fn batch(args: BatchArgs) -> Result<(), CliError> {
         }
     };
     let results = crate::batch::run_shots(shots, jobs, threads, &progress, &done);
-    let all: Vec<_> = results.iter().cloned().map(Some).collect();
+    // Shots start in the list's order, so those a signal kept from starting are the last ones.
+    let mut all: Vec<_> = results.iter().cloned().map(Some).collect();
+    all.resize(listed, None);
     write_summary(&summary, &all).map_err(CliError::Run)?;
     if let Some(e) = write_error.into_inner().ok().flatten() {
         return Err(CliError::Run(e));
