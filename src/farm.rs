@@ -63,7 +63,8 @@ pub fn emit_slurm(shots_file: &Path, shots: &[Shot], dir: &Path, cpus: u64) -> R
         shots_file.display()
     );
     let _ = writeln!(script, "# Submit with: sbatch {}", dir_abs.join(format!("{stem}.sbatch")).display());
-    let _ = writeln!(script, "#SBATCH --job-name=viewcloth-{}", sh(&stem));
+    let job: String = stem.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' { c } else { '_' }).collect();
+    let _ = writeln!(script, "#SBATCH --job-name=viewcloth-{job}");
     let _ = writeln!(script, "#SBATCH --array=0-{}", n - 1);
     let _ = writeln!(script, "#SBATCH --cpus-per-task={cpus}");
     let _ = writeln!(script, "#SBATCH --ntasks=1");
