@@ -19,6 +19,7 @@ pub mod cli;
 pub mod collision;
 pub mod compare;
 pub mod error;
+pub mod farm;
 pub mod forces;
 pub mod io;
 pub mod math;

@@ -250,3 +250,86 @@ fn resume_rejects_missing_and_damaged_checkpoints_and_changed_scenes() {
     assert!(err.contains("changed"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 15: SIGTERM stops a run at the end of its frame with a checkpoint of it and exit 75
+/// (even without --checkpoint-every), and `resume` finishes it byte-identically.
+#[test]
+fn sigterm_checkpoints_exits_75_and_resume_finishes_identically() {
+    let dir = temp_dir("sigterm");
+    let scene = dir.join("scene.json");
+    std::fs::write(&scene, scene_json().to_string()).unwrap();
+    let (reference_dir, run_dir) = (dir.join("reference"), dir.join("run"));
+    let (s, r, o) = (scene.to_str().unwrap(), reference_dir.to_str().unwrap(), run_dir.to_str().unwrap());
+    let out = viewcloth(&["simulate", s, "--out", r, "--quiet"]).output().unwrap();
+    assert!(out.status.success(), "reference run: {}", String::from_utf8_lossy(&out.stderr));
+    let reference = frame_files(&reference_dir);
+
+    for (what, extra) in [("no periodic checkpoints", &[][..]), ("every 5", &["--checkpoint-every", "5"][..])] {
+        let _ = std::fs::remove_dir_all(&run_dir);
+        let mut args = vec!["simulate", s, "--out", o, "--progress", "lines"];
+        args.extend(extra);
+        let child = viewcloth(&args).spawn().unwrap();
+        let start = Instant::now();
+        while !run_dir.join("frame_0003.obj").exists() {
+            assert!(start.elapsed() < Duration::from_secs(120), "{what}: run did not get to frame 3");
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        let pid = child.id().to_string();
+        assert!(Command::new("kill").args(["-TERM", &pid]).status().unwrap().success());
+        let out = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(75), "{what}: {err}");
+        let last = err.lines().last().unwrap_or("");
+        assert!(last.starts_with("error: interrupted after frame") && last.contains("resume"), "{what}: {err}");
+        let at = checkpoint::list(&run_dir).unwrap()[0].0;
+        assert!((3..FRAMES).contains(&at), "{what}: checkpoint at {at}");
+        assert!(err.contains(&format!("frame {at}/{FRAMES}")), "{what}: no progress line of frame {at}: {err}");
+        check_complete(&run_dir, &reference, what);
+        let stats: Value = serde_json::from_slice(&std::fs::read(run_dir.join("stats.json")).unwrap()).unwrap();
+        assert!(stats["error"].as_str().is_some_and(|e| e.contains("interrupted")), "{what}: {stats}");
+
+        let out = viewcloth(&["resume", o, "--quiet"]).output().unwrap();
+        assert!(out.status.success(), "{what}: resume: {}", String::from_utf8_lossy(&out.stderr));
+        let resumed = frame_files(&run_dir);
+        assert_eq!(resumed.len(), reference.len(), "{what}");
+        for ((name, bytes), (_, want)) in resumed.iter().zip(&reference) {
+            assert!(bytes == want, "{what}: {name} differs from the uninterrupted run");
+        }
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Issue 15: a fresh `simulate` into a directory holding another scene's run is refused (exit
+/// 2, one line, nothing touched) unless --force, which also removes that run's checkpoints (a
+/// stale checkpoint must never be resumed into the new run's output).
+#[test]
+fn simulate_refuses_another_scenes_output_without_force() {
+    let dir = temp_dir("claim");
+    let run = dir.join("run");
+    let o = run.to_str().unwrap();
+    let sheet = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/hanging_sheet.json");
+    let flag = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/flag_wind.json");
+    let (sheet, flag) = (sheet.to_str().unwrap(), flag.to_str().unwrap());
+    let ok = |args: &[&str]| {
+        let out = viewcloth(args).output().unwrap();
+        assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    };
+    ok(&["simulate", sheet, "--frames", "2", "--out", o, "--quiet", "--checkpoint-every", "1"]);
+    // The same scene again: allowed (a rerun), the old run's files replaced.
+    ok(&["simulate", sheet, "--frames", "1", "--out", o, "--quiet"]);
+    assert!(!run.join("frame_0002.obj").exists() && checkpoint::list(&run).unwrap().is_empty());
+    ok(&["simulate", sheet, "--frames", "2", "--out", o, "--quiet", "--checkpoint-every", "1"]);
+    let before = frame_files(&run);
+    let out = viewcloth(&["simulate", flag, "--frames", "1", "--out", o, "--quiet"]).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(err.contains("--force") && err.contains("another scene"), "{err}");
+    assert!(frame_files(&run) == before, "a refused run touched the frames");
+    ok(&["simulate", flag, "--frames", "1", "--out", o, "--quiet", "--force"]);
+    assert!(checkpoint::list(&run).unwrap().is_empty(), "the other run's checkpoints were kept");
+    assert_eq!(frame_files(&run).len(), 2);
+    let out = viewcloth(&["resume", o, "--quiet"]).output().unwrap();
+    assert_eq!(out.status.code(), Some(2), "resume found a checkpoint of the replaced run");
+    std::fs::remove_dir_all(&dir).ok();
+}

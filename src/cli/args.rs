@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use clap::{Parser, Subcommand};
 
 use crate::scene::RemeshMode;
+use crate::sim::progress::ProgressMode;
 
 #[derive(Parser)]
 #[command(name = "viewcloth", version, about = "Film cloth simulator: scene files in, one OBJ mesh per frame out")]
@@ -35,22 +36,9 @@ pub enum Command {
     /// coloured by the cloth's view factor.
     Render(RenderArgs),
     /// Run many shots from a shots file (JSON list of scenes with per-shot options), several at a
-    /// time; a failed shot does not stop the others.
-    Batch {
-        shots: PathBuf,
-        /// Shots run at once (each gets an equal share of the cores).
-        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=256))]
-        jobs: u64,
-        /// Worker threads per shot (default: the cores divided by --jobs).
-        #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
-        threads: Option<u64>,
-        /// The summary JSON (default: out/<shots file stem>.batch.json).
-        #[arg(long)]
-        summary: Option<PathBuf>,
-        /// No line per finished shot.
-        #[arg(long)]
-        quiet: bool,
-    },
+    /// time; a failed shot does not stop the others. A rerun skips finished shots and resumes
+    /// interrupted ones.
+    Batch(BatchArgs),
     /// Convert an ARCSim conf into a viewcloth scene file.
     Convert {
         conf: PathBuf,
@@ -76,9 +64,16 @@ pub struct SimulateArgs {
     /// Worker threads (default: all cores). Results are identical for any count.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
-    /// No progress bar.
+    /// No progress report, no closing line.
     #[arg(long)]
     pub quiet: bool,
+    /// Progress report: `bar`, `lines` (one stderr line per frame, for logs) or `none`
+    /// (default: a bar on a terminal, lines otherwise; `none` with --quiet).
+    #[arg(long, value_parser = ProgressMode::NAMES)]
+    pub progress: Option<String>,
+    /// Replace the run of another scene in the output directory (refused without it).
+    #[arg(long)]
+    pub force: bool,
     /// Also write each obstacle's world-space mesh per frame beside the cloth frames.
     #[arg(long)]
     pub export_obstacles: bool,
@@ -109,9 +104,51 @@ pub struct ResumeArgs {
     /// Worker threads (default: all cores). Results are identical for any count.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
-    /// No progress bar.
+    /// No progress report, no closing line.
     #[arg(long)]
     pub quiet: bool,
+    /// Progress report: `bar`, `lines` (one stderr line per frame, for logs) or `none`
+    /// (default: a bar on a terminal, lines otherwise; `none` with --quiet).
+    #[arg(long, value_parser = ProgressMode::NAMES)]
+    pub progress: Option<String>,
+}
+
+#[derive(clap::Args)]
+pub struct BatchArgs {
+    pub shots: PathBuf,
+    /// Shots run at once (each gets an equal share of the cores).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=256))]
+    pub jobs: u64,
+    /// Worker threads per shot (default: SLURM_CPUS_PER_TASK, else the cores, divided by --jobs).
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
+    pub threads: Option<u64>,
+    /// The summary JSON (default: out/<shots file stem>.batch.json; with --shot,
+    /// out/<shots file stem>.shot<N>.batch.json).
+    #[arg(long)]
+    pub summary: Option<PathBuf>,
+    /// No line per finished shot, no progress report.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Progress report: `bar`, `lines` (one stderr line per frame, for logs) or `none`
+    /// (default: a bar on a terminal, lines otherwise; `none` with --quiet).
+    #[arg(long, value_parser = ProgressMode::NAMES)]
+    pub progress: Option<String>,
+    /// Replace runs of other scenes in the shots' output directories (refused without it).
+    #[arg(long)]
+    pub force: bool,
+    /// Run only shot N of the list (counted from 0), e.g. as one task of a job array.
+    #[arg(long, value_name = "N", conflicts_with = "shot_from_env")]
+    pub shot: Option<u64>,
+    /// Run only the shot whose index is in environment variable VAR (e.g. SLURM_ARRAY_TASK_ID).
+    #[arg(long, value_name = "VAR")]
+    pub shot_from_env: Option<String>,
+    /// Write a job script for a scheduler instead of running: `slurm` (an sbatch array, one
+    /// task per shot) into --out.
+    #[arg(long, value_parser = ["slurm"], conflicts_with_all = ["shot", "shot_from_env"])]
+    pub emit: Option<String>,
+    /// Where --emit writes (default: out/<shots file stem>-slurm/).
+    #[arg(long, requires = "emit")]
+    pub out: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -173,4 +210,8 @@ pub struct RenderArgs {
     /// to red (1), obstacles grey.
     #[arg(long, default_value = "shade", value_parser = ["shade", "view"])]
     pub color: String,
+    /// Progress report: `bar`, `lines` (one stderr line per image) or `none` (default: a bar
+    /// on a terminal, lines otherwise).
+    #[arg(long, value_parser = ProgressMode::NAMES)]
+    pub progress: Option<String>,
 }

@@ -1,6 +1,7 @@
 //! The commands behind `viewcloth`'s subcommands. Each returns `Result<(), CliError>`; the binary
 //! prints an error as one line (`error: …`) and exits with its code: 2 for bad input (scene,
-//! mesh, camera, checkpoint, command line), 1 for a simulation or output failure.
+//! mesh, camera, checkpoint, command line), 1 for a simulation or output failure, 75 for a run
+//! stopped by SIGTERM or SIGINT after checkpointing (resumable).
 
 pub mod args;
 
@@ -12,13 +13,18 @@ use crate::error::InputError;
 use crate::render::{render_run, Colouring, RenderOptions};
 use crate::scene::{self, RemeshMode};
 use crate::shot::{self, ShotError, ShotRequest};
-use crate::sim::{resume, run_with_checkpoints, CheckpointOptions, ResumeOptions, RunError, RunOptions, SimError};
-use args::{CompareArgs, RenderArgs, ResumeArgs, SimulateArgs};
+use crate::sim::progress::{Progress, ProgressMode};
+use crate::sim::SimError;
+use crate::sim::{claim_output, interrupt, resume, run_shot, CheckpointOptions, ResumeOptions, RunError, RunOptions};
+use args::{BatchArgs, CompareArgs, RenderArgs, ResumeArgs, SimulateArgs};
 
 /// Exit code for bad input (scene, mesh, command line).
 pub const EXIT_INPUT: u8 = 2;
 /// Exit code for a simulation or output failure.
 pub const EXIT_RUN: u8 = 1;
+/// Exit code for a run stopped by SIGTERM or SIGINT at a checkpoint: `resume` (or a rerun of
+/// `batch`) continues it. 75 is `EX_TEMPFAIL` of sysexits.h: try again later.
+pub const EXIT_INTERRUPTED: u8 = 75;
 
 /// A failed command: its message (one line per problem) and exit code.
 #[derive(Debug, thiserror::Error)]
@@ -29,6 +35,9 @@ pub enum CliError {
     /// A simulation or output failure: exit 1.
     #[error("{0}")]
     Run(String),
+    /// Stopped by a signal after checkpointing: exit 75.
+    #[error("{0}")]
+    Interrupted(String),
 }
 
 impl CliError {
@@ -36,6 +45,7 @@ impl CliError {
         match self {
             CliError::Input(_) => EXIT_INPUT,
             CliError::Run(_) => EXIT_RUN,
+            CliError::Interrupted(_) => EXIT_INTERRUPTED,
         }
     }
 }
@@ -60,14 +70,39 @@ impl From<RunError> for CliError {
             RunError::Sim(SimError::Input(_)) | RunError::Input(_) | RunError::Checkpoint(_) => {
                 CliError::Input(e.to_string())
             }
+            RunError::Interrupted { .. } => CliError::Interrupted(e.to_string()),
             _ => CliError::Run(e.to_string()),
         }
     }
 }
 
-/// Sets the worker thread count of the global pool.
+/// The cores granted by Slurm (`SLURM_CPUS_PER_TASK`): under `task/none` the process sees every
+/// core of the node, so `available_parallelism` would oversubscribe it. A value that is not a
+/// positive integer is ignored with a warning.
+fn slurm_cpus() -> Option<u64> {
+    let text = std::env::var("SLURM_CPUS_PER_TASK").ok()?;
+    match text.trim().parse::<u64>() {
+        Ok(n) if (1..=1024).contains(&n) => Some(n),
+        _ => {
+            eprintln!("warning: SLURM_CPUS_PER_TASK=\"{text}\" is not a core count in 1..=1024; ignored");
+            None
+        }
+    }
+}
+
+/// The cores a run may use: `SLURM_CPUS_PER_TASK` when set, else all.
+fn cores() -> usize {
+    slurm_cpus().map(|n| n as usize).unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()))
+}
+
+/// Handles SIGTERM and SIGINT as "checkpoint and stop" (exit 75).
+fn install_interrupt() -> Result<(), CliError> {
+    interrupt::install().map_err(|e| CliError::Run(format!("cannot install the SIGTERM/SIGINT handlers: {e}")))
+}
+
+/// Sets the worker thread count of the global pool (`--threads`, else `SLURM_CPUS_PER_TASK`).
 fn set_threads(threads: Option<u64>) -> Result<(), CliError> {
-    let Some(n) = threads else { return Ok(()) };
+    let Some(n) = threads.or_else(slurm_cpus) else { return Ok(()) };
     rayon::ThreadPoolBuilder::new()
         .num_threads(n as usize)
         .build_global()
@@ -81,8 +116,20 @@ fn print_warnings(file: &Path, warnings: &[String]) {
 }
 
 pub fn simulate(args: SimulateArgs) -> Result<(), CliError> {
-    let SimulateArgs { scene, frames, out, threads, quiet, export_obstacles, mode, camera, checkpoint_every, base } =
-        args;
+    let SimulateArgs {
+        scene,
+        frames,
+        out,
+        threads,
+        quiet,
+        progress,
+        force,
+        export_obstacles,
+        mode,
+        camera,
+        checkpoint_every,
+        base,
+    } = args;
     set_threads(threads)?;
     // clap admits only RemeshMode::NAMES.
     let mode = mode.as_deref().and_then(RemeshMode::parse);
@@ -93,13 +140,17 @@ pub fn simulate(args: SimulateArgs) -> Result<(), CliError> {
     }
     let out_dir = out.unwrap_or_else(|| Path::new("out").join(&shot.stem));
     let opts = RunOptions { out_dir: out_dir.clone(), frames: frames.map(|f| f as usize), quiet, export_obstacles };
-    let ck = checkpoint_every.map(|every| CheckpointOptions {
-        every: every as usize,
+    // Without --checkpoint-every, a checkpoint is written only when a signal stops the run.
+    let ck = CheckpointOptions {
+        every: checkpoint_every.unwrap_or(0) as usize,
         scene_file: shot.scene_file.clone(),
         mode: shot.mode,
         camera_file: shot.camera_file.clone(),
-    });
-    let stats = run_with_checkpoints(shot.scene, &opts, ck.as_ref())?;
+    };
+    claim_output(&out_dir, &shot.scene.name, shot.scene_file.as_deref(), force)?;
+    install_interrupt()?;
+    let progress = Progress::new(ProgressMode::choose(progress.as_deref(), quiet));
+    let stats = run_shot(shot.scene, &opts, Some(&ck), &progress)?;
     if !quiet {
         let frames = stats.frames.len().saturating_sub(1);
         println!("{}: {frames} frames in {:.2} s → {}", stats.scene, stats.total_wall_s, out_dir.display());
@@ -109,7 +160,9 @@ pub fn simulate(args: SimulateArgs) -> Result<(), CliError> {
 
 pub fn resume_run(args: ResumeArgs) -> Result<(), CliError> {
     set_threads(args.threads)?;
-    let opts = ResumeOptions { frames: args.frames.map(|f| f as usize), quiet: args.quiet };
+    install_interrupt()?;
+    let progress = Progress::new(ProgressMode::choose(args.progress.as_deref(), args.quiet));
+    let opts = ResumeOptions { frames: args.frames.map(|f| f as usize), progress };
     let stats = resume(&args.dir, &opts)?;
     if !args.quiet {
         let resumed = stats.resumed_at.last().copied().unwrap_or(0);
@@ -194,7 +247,8 @@ pub fn render(args: RenderArgs) -> Result<(), CliError> {
     let frames = args.frames.as_deref().map(parse_frames).transpose()?;
     let camera = Camera::load(&args.camera)?;
     let colouring = if args.color == "view" { Colouring::View } else { Colouring::Shade };
-    let opts = RenderOptions { width, height, frames, every: args.every as usize, colouring };
+    let progress = ProgressMode::choose(args.progress.as_deref(), false);
+    let opts = RenderOptions { width, height, frames, every: args.every as usize, colouring, progress };
     let n = render_run(&args.dir, &camera, &opts).map_err(|e| match e.is_input() {
         true => CliError::Input(e.to_string()),
         false => CliError::Run(e.to_string()),
@@ -203,50 +257,125 @@ pub fn render(args: RenderArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-pub fn batch(
-    file: &Path,
-    jobs: u64,
-    threads: Option<u64>,
-    summary: Option<PathBuf>,
-    quiet: bool,
-) -> Result<(), CliError> {
-    let shots = crate::batch::load(file)?;
-    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1);
-    let threads = threads.map(|t| t as usize).unwrap_or((cores / jobs as usize).max(1));
-    let summary = summary.unwrap_or_else(|| {
-        let stem = file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "shots".into());
-        Path::new("out").join(format!("{stem}.batch.json"))
-    });
-    let n = shots.len();
-    let report = |r: &crate::batch::ShotResult| {
-        if quiet {
-            return;
+/// The shot `--shot N` or `--shot-from-env VAR` picks, checked against the list's length.
+fn chosen_shot(args: &BatchArgs, n: usize) -> Result<Option<usize>, CliError> {
+    let (index, given) = match (&args.shot, &args.shot_from_env) {
+        (Some(i), _) => (*i, format!("--shot {i}")),
+        (None, Some(var)) => {
+            let text = std::env::var(var).map_err(|_| {
+                CliError::Input(format!("--shot-from-env {var}: {var} is not set (expected a shot index)"))
+            })?;
+            let i = text.trim().parse::<u64>().map_err(|_| {
+                CliError::Input(format!("--shot-from-env {var}: expected a shot index (0, 1, …), got \"{text}\""))
+            })?;
+            (i, format!("--shot-from-env {var} ({var}={i})"))
         }
-        match &r.error {
-            None => {
-                println!("ok: {}: {} frames in {:.1} s → {}", r.scene.display(), r.frames, r.wall_s, r.out.display())
+        (None, None) => return Ok(None),
+    };
+    match usize::try_from(index).ok().filter(|&i| i < n) {
+        Some(i) => Ok(Some(i)),
+        None => {
+            Err(CliError::Input(format!("{given}: {} has {n} shots, numbered 0 to {}", args.shots.display(), n - 1)))
+        }
+    }
+}
+
+pub fn batch(args: BatchArgs) -> Result<(), CliError> {
+    let file = args.shots.as_path();
+    let shots = crate::batch::load(file, args.force)?;
+    let n = shots.len();
+    let stem = file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "shots".into());
+    if args.emit.is_some() {
+        let dir = args.out.clone().unwrap_or_else(|| Path::new("out").join(format!("{stem}-slurm")));
+        let cpus = args.threads.or_else(slurm_cpus).unwrap_or(crate::farm::DEFAULT_CPUS_PER_TASK);
+        let emitted = crate::farm::emit_slurm(file, &shots, &dir, cpus).map_err(CliError::Run)?;
+        println!(
+            "{} ({n} array tasks) and {} → sbatch {}",
+            emitted.script.display(),
+            emitted.commands.display(),
+            emitted.script.display()
+        );
+        return Ok(());
+    }
+    let chosen = chosen_shot(&args, n)?;
+    let jobs = args.jobs as usize;
+    let threads = args.threads.map(|t| t as usize).unwrap_or((cores() / jobs).max(1));
+    let summary = args.summary.clone().unwrap_or_else(|| match chosen {
+        Some(i) => Path::new("out").join(format!("{stem}.shot{i}.batch.json")),
+        None => Path::new("out").join(format!("{stem}.batch.json")),
+    });
+    let shots: Vec<(usize, crate::batch::Shot)> =
+        shots.into_iter().enumerate().filter(|(i, _)| chosen.is_none_or(|c| c == *i)).collect();
+    let listed = shots.len();
+    install_interrupt()?;
+    let quiet = args.quiet;
+    let mode = ProgressMode::choose(args.progress.as_deref(), quiet);
+    let bars = (mode == ProgressMode::Bar).then(indicatif::MultiProgress::new);
+    let progress = Progress { mode, label: None, bars };
+    let write_error: std::sync::Mutex<Option<String>> = std::sync::Mutex::new(None);
+    let done = |r: &crate::batch::ShotResult, all: &[Option<crate::batch::ShotResult>]| {
+        if !quiet {
+            match &r.error {
+                None => println!(
+                    "{}: {}: {} frames in {:.1} s → {}",
+                    r.status,
+                    r.scene.display(),
+                    r.frames,
+                    r.wall_s,
+                    r.out.display()
+                ),
+                Some(e) => println!("{}: {}: {e}", r.status, r.scene.display()),
             }
-            Some(e) => println!("failed: {}: {e}", r.scene.display()),
+        }
+        // Rewritten after every shot, so a killed batch leaves a summary of what finished.
+        if let Err(e) = write_summary(&summary, all) {
+            if let Ok(mut w) = write_error.lock() {
+                w.get_or_insert(e);
+            }
         }
     };
-    let results = crate::batch::run_shots(shots, jobs as usize, threads, &report);
-    let failed = results.iter().filter(|r| !r.ok).count();
-    let json = serde_json::to_string_pretty(&serde_json::json!({ "shots": results, "failed": failed }));
-    let written = json.map_err(|e| e.to_string()).and_then(|j| {
-        if let Some(dir) = summary.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
-        }
-        crate::io::write_atomic(&summary, j.as_bytes()).map_err(|e| e.to_string())
-    });
-    written.map_err(|e| CliError::Run(format!("{}: {e}", summary.display())))?;
+    let results = crate::batch::run_shots(shots, jobs, threads, &progress, &done);
+    // Shots start in the list's order, so those a signal kept from starting are the last ones.
+    let mut all: Vec<_> = results.iter().cloned().map(Some).collect();
+    all.resize(listed, None);
+    write_summary(&summary, &all).map_err(CliError::Run)?;
+    if let Some(e) = write_error.into_inner().ok().flatten() {
+        return Err(CliError::Run(e));
+    }
+    let failed = results.iter().filter(|r| r.status == "failed").count();
+    let interrupted = listed - results.len() + results.iter().filter(|r| r.status == "interrupted").count();
     if !quiet {
-        println!("{} of {n} shots ok; summary → {}", n - failed, summary.display());
+        println!("{} of {listed} shots ok; summary → {}", results.iter().filter(|r| r.ok).count(), summary.display());
+    }
+    if interrupted > 0 {
+        return Err(CliError::Interrupted(format!(
+            "interrupted: {interrupted} of {listed} shots not finished (checkpointed); run the same batch again to \
+             continue (summary: {})",
+            summary.display()
+        )));
     }
     match failed {
         0 => Ok(()),
         // Each failure was reported as its shot finished; the summary says which.
-        _ => Err(CliError::Run(format!("{failed} of {n} shots failed (summary: {})", summary.display()))),
+        _ => Err(CliError::Run(format!("{failed} of {listed} shots failed (summary: {})", summary.display()))),
     }
+}
+
+/// The summary JSON: the results so far in the shots' order, written atomically.
+fn write_summary(path: &Path, results: &[Option<crate::batch::ShotResult>]) -> Result<(), String> {
+    let done: Vec<_> = results.iter().flatten().collect();
+    let failed = done.iter().filter(|r| r.status == "failed").count();
+    let interrupted = done.iter().filter(|r| r.status == "interrupted").count();
+    let pending = results.len() - done.len();
+    let json = serde_json::json!({ "shots": done, "failed": failed, "interrupted": interrupted, "pending": pending });
+    let json = serde_json::to_string_pretty(&json).map_err(|e| e.to_string());
+    json.and_then(|j| {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
+        }
+        crate::io::write_atomic(path, j.as_bytes()).map_err(|e| e.to_string())
+    })
+    .map_err(|e| format!("{}: {e}", path.display()))
 }
 
 pub fn convert(conf: &Path, out: &Path, base: Option<&Path>) -> Result<(), CliError> {

@@ -25,6 +25,7 @@ use crate::error::InputError;
 use crate::io::write_atomic;
 use crate::math::{Real, Vec3};
 use crate::metrics::rasterize;
+use crate::sim::progress::ProgressMode;
 use crate::sizing::view::{triangle_view_factor, ViewParams};
 
 pub use run_dir::{read_stats, select_frames, FrameMeshes, RunFiles};
@@ -50,6 +51,8 @@ pub struct RenderOptions {
     /// Every this many frames, counted from the first of `frames`.
     pub every: usize,
     pub colouring: Colouring,
+    /// Progress per image written (a bar, one stderr line, or nothing).
+    pub progress: ProgressMode,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -100,12 +103,26 @@ pub fn render_run(dir: &Path, camera: &Camera, opts: &RenderOptions) -> Result<u
     // halfway writes nothing), then again to render it.
     let checked: Vec<Result<(), InputError>> = frames.par_iter().map(|&(f, _)| run.load(f).map(drop)).collect();
     checked.into_iter().collect::<Result<(), _>>()?;
-    for &(f, t) in &frames {
+    let (started, n) = (std::time::Instant::now(), frames.len());
+    let bar = (opts.progress == ProgressMode::Bar).then(|| indicatif::ProgressBar::new(n as u64));
+    for (k, &(f, t)) in frames.iter().enumerate() {
+        let clock = std::time::Instant::now();
         let meshes = run.load(f)?;
         let rgb = render_frame(&meshes, &camera.view_at(t), opts.width, opts.height, opts.colouring);
         let path = run.image_path(f);
         let png = png::encode(opts.width, opts.height, &rgb);
         write_atomic(&path, &png).map_err(|source| RenderError::Io { path, source })?;
+        if let Some(bar) = &bar {
+            bar.set_position(k as u64 + 1);
+        }
+        if opts.progress == ProgressMode::Lines {
+            let eta = started.elapsed().as_secs_f64() / (k + 1) as f64 * (n - k - 1) as f64;
+            let s = clock.elapsed().as_secs_f64();
+            eprintln!("render: image {}/{n} (frame {f}), {s:.2} s/image, ETA {eta:.0}s", k + 1);
+        }
+    }
+    if let Some(bar) = bar {
+        bar.finish();
     }
     Ok(frames.len())
 }

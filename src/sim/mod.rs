@@ -6,6 +6,8 @@
 mod adapt;
 pub mod checkpoint;
 pub mod checks;
+pub mod interrupt;
+pub mod progress;
 pub mod recover;
 mod run;
 pub mod state;
@@ -13,7 +15,10 @@ mod step;
 pub mod timers;
 pub mod workspace;
 
-pub use run::{resume, run, run_with_checkpoints, CheckpointOptions, ResumeOptions, RunError, RunOptions};
+pub use run::{
+    check_output, claim_output, clear_output, resume, run, run_shot, run_with_checkpoints, CheckpointOptions,
+    ResumeOptions, RunError, RunOptions,
+};
 pub use state::SimState;
 pub use workspace::Workspace;
 

@@ -3,7 +3,6 @@
 //! the order frame → stats.json → checkpoint, so a run killed at any instant leaves complete
 //! files only, and a checkpoint never refers to a frame that is not on disk.
 
-use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -15,6 +14,7 @@ use crate::scene::{RemeshMode, Scene};
 use crate::shot::{self, ShotRequest};
 
 use super::checkpoint::{self, CheckpointError, RunRecord};
+use super::progress::{Progress, ProgressMode, Reporter};
 use super::timers::Stage;
 use super::{SimError, Simulation};
 
@@ -27,8 +27,8 @@ pub struct RunOptions {
     pub export_obstacles: bool,
 }
 
-/// Checkpointing of a run: every `every` frames (and at the last), with what `resume` needs to
-/// reload the scene.
+/// Checkpointing of a run: every `every` frames (and at the last; `every` 0: only when the run
+/// is interrupted), with what `resume` needs to reload the scene.
 pub struct CheckpointOptions {
     pub every: usize,
     /// The scene file, `None` for the built-in shot.
@@ -50,6 +50,20 @@ pub enum RunError {
     Checkpoint(#[from] CheckpointError),
     #[error("{0}")]
     Input(InputError),
+    /// SIGTERM or SIGINT: the run stopped after frame `frame`, checkpointed when it could be.
+    #[error("{}", interrupted_message(.dir, *.frame, *.last, .checkpoint.as_deref()))]
+    Interrupted { dir: PathBuf, frame: usize, last: usize, checkpoint: Option<PathBuf> },
+}
+
+fn interrupted_message(dir: &Path, frame: usize, last: usize, checkpoint: Option<&Path>) -> String {
+    match checkpoint {
+        Some(ck) => format!(
+            "interrupted after frame {frame} of {last}; checkpoint {}: continue with `viewcloth resume {}`",
+            ck.display(),
+            dir.display()
+        ),
+        None => format!("interrupted after frame {frame} of {last} (no checkpoint: the run was not checkpointed)"),
+    }
 }
 
 fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
@@ -67,6 +81,17 @@ pub fn run_with_checkpoints(
     scene: Scene,
     opts: &RunOptions,
     ck: Option<&CheckpointOptions>,
+) -> Result<RunStats, RunError> {
+    let progress = Progress::new(ProgressMode::choose(None, opts.quiet));
+    run_shot(scene, opts, ck, &progress)
+}
+
+/// `run_with_checkpoints`, reporting its frames to `progress` (`opts.quiet` is not looked at).
+pub fn run_shot(
+    scene: Scene,
+    opts: &RunOptions,
+    ck: Option<&CheckpointOptions>,
+    progress: &Progress,
 ) -> Result<RunStats, RunError> {
     let frames = opts.frames.unwrap_or(scene.frames);
     let digits = frames.to_string().len().max(4);
@@ -94,14 +119,14 @@ pub fn run_with_checkpoints(
     };
     let stats = RunStats { scene: sim.scene.name.clone(), mode: mode.into(), ..Default::default() };
     let out = Output { dir: &opts.out_dir, names, digits, export_obstacles: opts.export_obstacles, record, adaptive };
-    out.frames(&mut sim, stats, 0, frames, opts.quiet, 0.0)
+    out.frames(&mut sim, stats, 0, frames, progress, 0.0)
 }
 
 /// Options of `viewcloth resume`.
 pub struct ResumeOptions {
     /// New last frame (default: the run's own).
     pub frames: Option<usize>,
-    pub quiet: bool,
+    pub progress: Progress,
 }
 
 /// Continues the run in `dir` from its newest intact checkpoint, to its last frame (or
@@ -154,7 +179,78 @@ pub fn resume(dir: &Path, opts: &ResumeOptions) -> Result<RunStats, RunError> {
         adaptive,
     };
     let wall_before = stats.total_wall_s;
-    out.frames(&mut sim, stats, first + 1, frames, opts.quiet, wall_before)
+    out.frames(&mut sim, stats, first + 1, frames, &opts.progress, wall_before)
+}
+
+/// Readies `dir` for a fresh run of the scene named `scene_name` (file `scene_file`): refused
+/// when it holds another scene's run (its stats.json names another scene, a checkpoint another
+/// scene file, or frames come with no stats.json) unless `force`; then the files of the run it
+/// replaces (frames, obstacle meshes, checkpoints, stats.json) are removed, so that no stale
+/// checkpoint can later be resumed into the new run's output.
+pub fn claim_output(dir: &Path, scene_name: &str, scene_file: Option<&Path>, force: bool) -> Result<(), RunError> {
+    if !force {
+        check_output(dir, scene_name, scene_file)?;
+    }
+    clear_output(dir)
+}
+
+/// The refusal of `claim_output`, alone (nothing is removed).
+pub fn check_output(dir: &Path, scene_name: &str, scene_file: Option<&Path>) -> Result<(), RunError> {
+    if run_files(dir).is_empty() {
+        return Ok(());
+    }
+    match other_run(dir, scene_name, scene_file) {
+        None => Ok(()),
+        Some(other) => Err(RunError::Input(InputError {
+            file: dir.to_path_buf(),
+            location: None,
+            msg: format!("holds {other}; give --force to replace it, or another output directory"),
+        })),
+    }
+}
+
+/// Removes the files of a run in `dir` (frames, obstacle meshes, checkpoints, stats.json).
+pub fn clear_output(dir: &Path) -> Result<(), RunError> {
+    for p in run_files(dir) {
+        std::fs::remove_file(&p).map_err(io_err(&p))?;
+    }
+    Ok(())
+}
+
+fn run_files(dir: &Path) -> Vec<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(dir) else { return Vec::new() };
+    entries.flatten().map(|e| e.path()).filter(|p| is_run_file(p)).collect()
+}
+
+/// The run in `dir` when it is not one of this scene, described.
+fn other_run(dir: &Path, scene_name: &str, scene_file: Option<&Path>) -> Option<String> {
+    if let Ok((_, ck)) = checkpoint::latest(dir) {
+        if ck.run.scene_file.as_deref() != scene_file {
+            let name = ck.run.scene_file.map_or("the built-in shot".into(), |f| f.display().to_string());
+            return Some(format!("a checkpointed run of another scene ({name})"));
+        }
+    }
+    let stats = std::fs::read(dir.join("stats.json")).ok();
+    let name = stats
+        .and_then(|b| serde_json::from_slice::<serde_json::Value>(&b).ok())
+        .and_then(|v| v.get("scene").and_then(|s| s.as_str()).map(str::to_string));
+    match name {
+        Some(n) if n == scene_name => None,
+        Some(n) => Some(format!("the frames of another scene ('{n}')")),
+        None => Some("frames without a readable stats.json (another run's?)".into()),
+    }
+}
+
+/// A file a run writes: frame, obstacle mesh, checkpoint, stats.json.
+fn is_run_file(path: &Path) -> bool {
+    let Some(name) = path.file_name().and_then(|n| n.to_str()) else { return false };
+    let numbered = |prefix: &str, suffix: &str| {
+        name.strip_prefix(prefix).and_then(|n| n.strip_suffix(suffix)).is_some_and(|n| !n.is_empty())
+    };
+    name == "stats.json"
+        || numbered("frame_", ".obj")
+        || numbered("obstacle_", ".obj")
+        || numbered("checkpoint_", ".bin")
 }
 
 fn is_adaptive(scene: &Scene) -> bool {
@@ -213,12 +309,20 @@ impl Output<'_> {
         write_atomic(&path, &json).map_err(io_err(&path))
     }
 
-    /// Writes the checkpoint of frame `f` when due (every `every` frames and at the last),
-    /// then removes all but it and the one before it.
-    fn checkpoint(&self, sim: &mut Simulation, stats: &RunStats, f: usize, last: usize) -> Result<(), RunError> {
-        let Some(record) = &self.record else { return Ok(()) };
-        if f == 0 || (f % record.every != 0 && f != last) {
-            return Ok(());
+    /// Writes the checkpoint of frame `f` when due (every `every` frames and at the last) or
+    /// `now`, then removes all but it and the one before it. Returns its path when written.
+    fn checkpoint(
+        &self,
+        sim: &mut Simulation,
+        stats: &RunStats,
+        f: usize,
+        last: usize,
+        now: bool,
+    ) -> Result<Option<PathBuf>, RunError> {
+        let Some(record) = &self.record else { return Ok(None) };
+        let due = record.every > 0 && f > 0 && (f.is_multiple_of(record.every) || f == last);
+        if !due && !now {
+            return Ok(None);
         }
         let clock = Instant::now();
         let path = checkpoint::checkpoint_path(self.dir, f, self.digits);
@@ -228,7 +332,7 @@ impl Output<'_> {
             let _ = std::fs::remove_file(p);
         }
         sim.ws.timers.since(Stage::Checkpoint, clock);
-        Ok(())
+        Ok(Some(path))
     }
 
     /// Frames `first..=last` (frame 0 is the initial state, not simulated); `wall_before` is
@@ -239,22 +343,11 @@ impl Output<'_> {
         mut stats: RunStats,
         first: usize,
         last: usize,
-        quiet: bool,
+        progress: &Progress,
         wall_before: f64,
     ) -> Result<RunStats, RunError> {
         let started = Instant::now();
-        let progress = (!quiet && std::io::stdout().is_terminal()).then(|| {
-            let bar = indicatif::ProgressBar::new(last as u64);
-            bar.set_style(
-                indicatif::ProgressStyle::with_template(
-                    "{msg} [{bar:40}] {pos}/{len} frames, {elapsed} elapsed, ETA {eta}",
-                )
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
-            );
-            bar.set_message(sim.scene.name.clone());
-            bar.set_position(first as u64);
-            bar
-        });
+        let report = Reporter::start(progress, &sim.scene.name, first, last);
         for f in first..=last {
             let clock = Instant::now();
             if f > 0 {
@@ -305,16 +398,35 @@ impl Output<'_> {
             }
             stats.total_wall_s = wall_before + started.elapsed().as_secs_f64();
             self.write_stats(&stats)?;
-            self.checkpoint(sim, &stats, f, last)?;
-            if let Some(bar) = &progress {
-                bar.set_position(f as u64);
+            self.checkpoint(sim, &stats, f, last, false)?;
+            report.frame(f, fs_wall(&stats), sim.state.mesh.faces.len());
+            if f < last && super::interrupt::requested() {
+                report.finish();
+                return self.interrupted(sim, stats, f, last);
             }
         }
-        if let Some(bar) = progress {
-            bar.finish();
-        }
+        report.finish();
         Ok(stats)
     }
+
+    /// Stops the run after frame `f` (a signal): its checkpoint, then stats.json saying so.
+    fn interrupted(
+        &self,
+        sim: &mut Simulation,
+        mut stats: RunStats,
+        f: usize,
+        last: usize,
+    ) -> Result<RunStats, RunError> {
+        let checkpoint = self.checkpoint(sim, &stats, f, last, true)?;
+        stats.error = Some(format!("interrupted after frame {f} (SIGTERM or SIGINT)"));
+        self.write_stats(&stats)?;
+        Err(RunError::Interrupted { dir: self.dir.to_path_buf(), frame: f, last, checkpoint })
+    }
+}
+
+/// The wall time of the last frame recorded.
+fn fs_wall(stats: &RunStats) -> f64 {
+    stats.frames.last().map_or(0.0, |f| f.wall_s)
 }
 
 /// A name reduced to characters safe in a file name.
