@@ -98,12 +98,25 @@ fn compare_reports_errors_against_time_with_a_chaos_floor() {
     ]);
     assert!(r["floor"].is_null(), "no floor with a given reference");
     let run = &r["modes"][0];
-    // Identical frames: identical images; surface distances at rounding level.
-    for (field, m) in [("visible", "silhouette"), ("visible", "depth")] {
-        assert_eq!(err(run, field, m), 0.0, "{field}.{m}");
+    // Identical frames: every measure exactly zero, in every frame.
+    assert_every_error_is_zero(run);
+}
+
+/// Every measure of `run`, mean and per frame, is exactly 0.
+fn assert_every_error_is_zero(run: &Value) {
+    let e = &run["errors"];
+    let frames = e["per_frame"].as_array().unwrap();
+    assert!(!frames.is_empty());
+    for set in [e].into_iter().chain(frames) {
+        for m in ["normal_deg", "normal_flat_deg", "silhouette", "depth"] {
+            assert_eq!(set["visible"][m].as_f64(), Some(0.0), "visible.{m}: {set}");
+        }
+        for field in ["geometric", "geometric_visible"] {
+            for m in ["mean", "rms", "p95", "max"] {
+                assert_eq!(set[field][m].as_f64(), Some(0.0), "{field}.{m}: {set}");
+            }
+        }
     }
-    assert!(err(run, "visible", "normal_deg") < 1e-6, "{}", err(run, "visible", "normal_deg"));
-    assert!(err(run, "geometric", "p95") < 1e-12, "{}", err(run, "geometric", "p95"));
 }
 
 #[test]

@@ -19,13 +19,14 @@ use std::path::{Path, PathBuf};
 use serde::Serialize;
 
 use crate::camera::Camera;
+use crate::collision::obstacle::ObstacleBody;
 use crate::error::InputError;
 use crate::io::obj::read_obj;
 use crate::io::stats::RunStats;
 use crate::math::{Real, Vec3};
-use crate::metrics::{rasterize, surface_distance, visible_error, visible_triangles, Surface};
+use crate::metrics::{surface_distance, visible_error, FrameImage, Surface};
 use crate::metrics::{SurfaceDistance, VisibleError};
-use crate::render::run_dir::{self, RunFiles};
+use crate::render::run_dir::{self, FrameMeshes, RunFiles};
 use crate::scene::{RemeshMode, Scene};
 use crate::sim::{run, RunError, RunOptions};
 
@@ -55,15 +56,28 @@ pub struct CompareOptions {
     pub quiet: bool,
 }
 
-/// The error of one run against the reference, averaged over the compared frames.
+/// The error of one run against the reference in one frame.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct FrameErrors {
+    pub frame: usize,
+    pub time: Real,
+    pub visible: VisibleError,
+    /// Over all cloth.
+    pub geometric: SurfaceDistance,
+    /// Each triangle weighted by its visible pixel fraction (in its own run's image).
+    pub geometric_visible: SurfaceDistance,
+}
+
+/// The error of one run against the reference, averaged over the compared frames, and per frame.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Errors {
     pub visible: VisibleError,
     /// Over all cloth.
     pub geometric: SurfaceDistance,
-    /// Over the faces the camera sees (in either run).
+    /// Each triangle weighted by its visible pixel fraction (in its own run's image).
     pub geometric_visible: SurfaceDistance,
     pub frames_compared: usize,
+    pub per_frame: Vec<FrameErrors>,
 }
 
 /// One run: its cost and, except for the reference, its error.
@@ -128,7 +142,8 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
         if !opts.quiet {
             eprintln!("compare: {name} run → {}", dir.display());
         }
-        let run_opts = RunOptions { out_dir: dir.clone(), frames: opts.frames, quiet: true, export_obstacles: false };
+        // Obstacles exported: the frames are rasterised with them (and `render` shows them).
+        let run_opts = RunOptions { out_dir: dir.clone(), frames: opts.frames, quiet: true, export_obstacles: true };
         let stats = run(s, &run_opts)?;
         Ok(run_report(name, dir, &stats))
     };
@@ -144,8 +159,9 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
     for &mode in &opts.modes {
         modes.push(simulate(mode.name(), mode, false)?);
     }
+    let bodies: Vec<ObstacleBody> = scene.obstacles.iter().map(ObstacleBody::new).collect();
     for r in floor.iter_mut().chain(modes.iter_mut()) {
-        r.errors = Some(errors(&reference.dir, &r.dir, &ref_stats, &camera, opts)?);
+        r.errors = Some(errors(&reference.dir, &r.dir, &ref_stats, &camera, &bodies, opts)?);
     }
     let report =
         CompareReport { scene: scene.name.clone(), frames, image: [opts.width, opts.height], reference, floor, modes };
@@ -177,74 +193,114 @@ fn run_report(name: &str, dir: PathBuf, stats: &RunStats) -> RunReport {
     RunReport { name: name.into(), dir, wall_s: stats.total_wall_s, mean_faces: faces, errors: None }
 }
 
+/// A frame's cloth: positions and triangles.
+type ClothMesh = (Vec<Vec3>, Vec<[usize; 3]>);
+
 /// A frame's cloth surface: positions and triangles (file names as the run numbers them).
-fn frame_mesh(files: &RunFiles, frame: usize) -> Result<(Vec<Vec3>, Vec<[usize; 3]>), RunError> {
+fn frame_mesh(files: &RunFiles, frame: usize) -> Result<ClothMesh, RunError> {
     let path = files.frame_path(frame);
     let obj = read_obj(&path).map_err(|msg| RunError::Input(InputError { file: path.clone(), location: None, msg }))?;
     let tris = obj.triangles.iter().map(|t| t.map(|c| c.v)).collect();
     Ok((obj.positions, tris))
 }
 
-/// Mean errors of the run in `dir` against the reference over the compared frames.
+/// The obstacles of `frame` at `time`: those the reference run exported, or else the scene's
+/// re-posed at that time (the same meshes: obstacles are scripted, not simulated).
+fn obstacles(ref_files: &RunFiles, bodies: &[ObstacleBody], frame: usize, time: Real) -> Result<FrameMeshes, RunError> {
+    if let Some(m) = ref_files.obstacles(frame).map_err(RunError::Input)? {
+        return Ok(m);
+    }
+    let mut m = FrameMeshes::default();
+    for b in bodies {
+        m.append(b.positions_at(time), b.triangles().to_vec());
+    }
+    Ok(m)
+}
+
+/// The cloth and the obstacles seen from `view`.
+fn frame_image(
+    cloth: &ClothMesh,
+    obstacles: &FrameMeshes,
+    view: &crate::camera::View,
+    opts: &CompareOptions,
+) -> FrameImage {
+    let mut all = FrameMeshes::default();
+    all.append(cloth.0.clone(), cloth.1.clone());
+    all.append(obstacles.positions.clone(), obstacles.triangles.clone());
+    FrameImage::render(&all.positions, &all.triangles, cloth.1.len(), view, opts.width, opts.height)
+}
+
+/// One frame's errors of `candidate` against `reference` (cloth meshes), with the obstacles.
+fn frame_errors(
+    reference: &ClothMesh,
+    candidate: &ClothMesh,
+    obstacles: &FrameMeshes,
+    view: &crate::camera::View,
+    opts: &CompareOptions,
+) -> (VisibleError, SurfaceDistance, SurfaceDistance) {
+    let (ir, ic) = (frame_image(reference, obstacles, view, opts), frame_image(candidate, obstacles, view, opts));
+    let vis = visible_error(&ir, &ic);
+    let all = surface_distance(surface(reference, None), surface(candidate, None));
+    let seen = surface_distance(
+        surface(reference, Some(&ir.visible_fraction[..])),
+        surface(candidate, Some(&ic.visible_fraction[..])),
+    );
+    (vis, all, seen)
+}
+
+fn surface<'a>(m: &'a ClothMesh, weight: Option<&'a [Real]>) -> Surface<'a> {
+    Surface { positions: &m.0, triangles: &m.1, weight }
+}
+
+/// Errors of the run in `dir` against the reference over the compared frames.
 fn errors(
     reference: &Path,
     dir: &Path,
     ref_stats: &RunStats,
     camera: &Camera,
+    bodies: &[ObstacleBody],
     opts: &CompareOptions,
 ) -> Result<Errors, RunError> {
     let stats = read_stats(dir)?;
     let last = stats.frames.len().min(ref_stats.frames.len()).saturating_sub(1);
     let ref_files = RunFiles::scan(reference, 1, last).map_err(RunError::Input)?;
     let files = RunFiles::scan(dir, 1, last).map_err(RunError::Input)?;
-    let mut sum = Errors::default();
-    let mut n = 0;
+    let mut per_frame = Vec::new();
     for f in (opts.every.max(1)..=last).step_by(opts.every.max(1)) {
-        let (xr, tr) = frame_mesh(&ref_files, f)?;
-        let (xc, tc) = frame_mesh(&files, f)?;
-        let view = camera.view_at(ref_stats.frames[f].time);
-        let ir = rasterize(&xr, &tr, &view, opts.width, opts.height);
-        let ic = rasterize(&xc, &tc, &view, opts.width, opts.height);
-        let vis = visible_error(&ir, &ic);
-        let (mr, mc) = (visible_triangles(&ir, tr.len()), visible_triangles(&ic, tc.len()));
-        let all = surface_distance(
-            Surface { positions: &xr, triangles: &tr, mask: None },
-            Surface { positions: &xc, triangles: &tc, mask: None },
-        );
-        let seen = surface_distance(
-            Surface { positions: &xr, triangles: &tr, mask: Some(&mr) },
-            Surface { positions: &xc, triangles: &tc, mask: Some(&mc) },
-        );
-        accumulate(&mut sum, &vis, &all, &seen);
-        n += 1;
+        let time = ref_stats.frames[f].time;
+        let (r, c) = (frame_mesh(&ref_files, f)?, frame_mesh(&files, f)?);
+        let obstacles = obstacles(&ref_files, bodies, f, time)?;
+        let (visible, geometric, geometric_visible) = frame_errors(&r, &c, &obstacles, &camera.view_at(time), opts);
+        per_frame.push(FrameErrors { frame: f, time, visible, geometric, geometric_visible });
     }
-    Ok(mean(sum, n))
+    Ok(mean(per_frame))
 }
 
-fn accumulate(sum: &mut Errors, vis: &VisibleError, all: &SurfaceDistance, seen: &SurfaceDistance) {
-    sum.visible.normal_deg += vis.normal_deg;
-    sum.visible.silhouette += vis.silhouette;
-    sum.visible.depth += vis.depth;
-    sum.visible.pixels += vis.pixels;
-    for (s, d) in [(&mut sum.geometric, all), (&mut sum.geometric_visible, seen)] {
-        s.mean += d.mean;
-        s.p95 += d.p95;
-        s.samples += d.samples;
-    }
-}
-
-fn mean(mut sum: Errors, n: usize) -> Errors {
+/// Means over the frames (counts too, rounded down), with the frames kept.
+fn mean(per_frame: Vec<FrameErrors>) -> Errors {
+    let n = per_frame.len();
     let k = n.max(1) as Real;
-    sum.visible.normal_deg /= k;
-    sum.visible.silhouette /= k;
-    sum.visible.depth /= k;
-    sum.visible.pixels /= n.max(1);
-    for s in [&mut sum.geometric, &mut sum.geometric_visible] {
-        s.mean /= k;
-        s.p95 /= k;
-        s.samples /= n.max(1);
+    let mut sum = Errors::default();
+    for e in &per_frame {
+        let (s, v) = (&mut sum.visible, &e.visible);
+        s.normal_deg += v.normal_deg / k;
+        s.normal_flat_deg += v.normal_flat_deg / k;
+        s.silhouette += v.silhouette / k;
+        s.depth += v.depth / k;
+        s.pixels += v.pixels;
+        for (s, d) in [(&mut sum.geometric, &e.geometric), (&mut sum.geometric_visible, &e.geometric_visible)] {
+            s.mean += d.mean / k;
+            s.rms += d.rms / k;
+            s.p95 += d.p95 / k;
+            s.max += d.max / k;
+            s.samples += d.samples;
+        }
     }
+    sum.visible.pixels /= n.max(1);
+    sum.geometric.samples /= n.max(1);
+    sum.geometric_visible.samples /= n.max(1);
     sum.frames_compared = n;
+    sum.per_frame = per_frame;
     sum
 }
 
