@@ -134,7 +134,10 @@ pub struct CompareArgs {
     /// adaptive minimum edge length, simulated here). No chaos floor is run then.
     #[arg(long, value_name = "DIR")]
     pub reference: Option<PathBuf>,
-    /// Skip the chaos-floor run (the reference re-run from perturbed positions).
+    /// Chaos-floor runs: the reference re-run from independently perturbed positions.
+    #[arg(long, value_name = "K", default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=100))]
+    pub floor_runs: u64,
+    /// Skip the chaos-floor runs.
     #[arg(long)]
     pub no_floor: bool,
     /// Image size of the visible error, WIDTHxHEIGHT.

@@ -163,7 +163,7 @@ pub fn compare_modes(args: CompareArgs) -> Result<(), CliError> {
         frames: args.frames.map(|f| f as usize),
         modes: args.modes.iter().filter_map(|m| RemeshMode::parse(m)).collect(),
         reference: args.reference,
-        floor: !args.no_floor,
+        floor_runs: if args.no_floor { 0 } else { args.floor_runs as usize },
         width,
         height,
         every: args.every as usize,

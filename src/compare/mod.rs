@@ -3,15 +3,19 @@
 //!
 //! The reference is the uniform mesh at the adaptive minimum edge length (or a run the user
 //! names). Cloth is chaotic: runs that differ by rounding grow different wrinkles, so the
-//! reference is also re-run from positions perturbed by `FLOOR_PERTURBATION`, and that pair's
-//! error, the chaos floor, is what an error should be compared with: each mode's error is also
-//! given as a multiple of it.
+//! reference is also re-run K times from positions independently perturbed by
+//! `FLOOR_PERTURBATION`, and those runs' errors, the chaos floor with its spread (`floor`), are
+//! what an error should be compared with: each mode gets, per measure, a multiple of the floor
+//! and a verdict (within the band, or how many standard deviations above).
 //!
-//! Per compared frame: visible error (both meshes rasterised from the camera at that frame's
-//! time: normal angle, silhouette mismatch, relative depth) and geometric error (two-sided
-//! surface distance, over all cloth and over the faces the camera sees); per run, their means
-//! over the frames, with the wall time and mean face count.
+//! Per compared frame, the cloth and the obstacles (exported by the runs, or re-posed from the
+//! scene) are rasterised from the camera at that frame's time: visible error over the pixels
+//! where cloth is in front (shading and flat normal angle, silhouette mismatch, relative depth)
+//! and geometric error (two-sided distance between the densely sampled surfaces, over all cloth
+//! and weighted by each triangle's visible pixel fraction); per run, every frame's errors and
+//! their means, with the wall time and mean face count.
 
+mod floor;
 mod report;
 
 use std::path::{Path, PathBuf};
@@ -30,10 +34,13 @@ use crate::render::run_dir::{self, FrameMeshes, RunFiles};
 use crate::scene::{RemeshMode, Scene};
 use crate::sim::{run, RunError, RunOptions};
 
+pub use floor::{floor_band, verdicts, FloorBand, MeasureBand, Verdict, MEASURES};
 pub use report::{markdown, svg_plot};
 
-/// Size (m) of the random displacement of every initial node in the chaos-floor run.
+/// Size (m) of the random displacement of every initial node in the chaos-floor runs.
 pub const FLOOR_PERTURBATION: Real = 1e-6;
+/// Floor runs by default (`--floor-runs`).
+pub const FLOOR_RUNS: usize = 3;
 
 /// What `compare` runs and measures.
 #[derive(Clone, Debug)]
@@ -46,8 +53,8 @@ pub struct CompareOptions {
     pub modes: Vec<RemeshMode>,
     /// An existing run directory to use as the reference instead of simulating one.
     pub reference: Option<PathBuf>,
-    /// Also run the chaos floor (a perturbed reference).
-    pub floor: bool,
+    /// Chaos-floor runs (the reference from independently perturbed positions); 0 for none.
+    pub floor_runs: usize,
     /// Rasterised image size (pixels).
     pub width: usize,
     pub height: usize,
@@ -89,6 +96,8 @@ pub struct RunReport {
     pub wall_s: Real,
     pub mean_faces: Real,
     pub errors: Option<Errors>,
+    /// Every measure against the floor band (modes only, when there is a floor).
+    pub verdicts: Option<Vec<Verdict>>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -97,22 +106,11 @@ pub struct CompareReport {
     pub frames: usize,
     pub image: [usize; 2],
     pub reference: RunReport,
-    /// The perturbed reference: its error is the chaos floor.
-    pub floor: Option<RunReport>,
+    /// The perturbed references (`floor_1`, `floor_2`, …): their errors are the chaos floor.
+    pub floors: Vec<RunReport>,
+    /// The floor's mean and spread per measure, per frame and over the run.
+    pub floor_band: Option<FloorBand>,
     pub modes: Vec<RunReport>,
-}
-
-impl CompareReport {
-    /// `e / floor` for each error measure, when there is a floor.
-    pub fn floor_multiple(&self, e: &Errors) -> Option<[Real; 3]> {
-        let f = self.floor.as_ref()?.errors.as_ref()?;
-        let ratio = |a: Real, b: Real| if b > 0.0 { a / b } else { Real::INFINITY };
-        Some([
-            ratio(e.visible.normal_deg, f.visible.normal_deg),
-            ratio(e.visible.silhouette, f.visible.silhouette),
-            ratio(e.geometric.mean, f.geometric.mean),
-        ])
-    }
 }
 
 /// Runs the shot in every mode (and the reference and floor unless given or off), measures the
@@ -126,7 +124,7 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
         }));
     };
     std::fs::create_dir_all(&opts.out_dir).map_err(|source| RunError::Io { path: opts.out_dir.clone(), source })?;
-    let simulate = |name: &str, mode: RemeshMode, perturb: bool| -> Result<RunReport, RunError> {
+    let simulate = |name: &str, mode: RemeshMode, perturb: Option<u64>| -> Result<RunReport, RunError> {
         let mut s = scene.clone();
         if s.set_remesh_mode(mode) == 0 && mode != RemeshMode::Uniform {
             return Err(RunError::Input(InputError {
@@ -135,8 +133,8 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
                 msg: format!("scene '{}' has no cloth with a remesh block to run in {name} mode", s.name),
             }));
         }
-        if perturb {
-            perturb_positions(&mut s);
+        if let Some(seed) = perturb {
+            perturb_positions(&mut s, seed);
         }
         let dir = opts.out_dir.join(name);
         if !opts.quiet {
@@ -149,32 +147,56 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
     };
     let reference = match &opts.reference {
         Some(dir) => run_report("reference", dir.clone(), &read_stats(dir)?),
-        None => simulate("reference", RemeshMode::Uniform, false)?,
+        None => simulate("reference", RemeshMode::Uniform, None)?,
     };
     let ref_stats = read_stats(&reference.dir)?;
     let frames = ref_stats.frames.len().saturating_sub(1);
-    let mut floor =
-        if opts.floor && opts.reference.is_none() { Some(simulate("floor", RemeshMode::Uniform, true)?) } else { None };
+    let floor_runs = if opts.reference.is_none() { opts.floor_runs } else { 0 };
+    let mut floors = Vec::new();
+    for k in 1..=floor_runs {
+        floors.push(simulate(&format!("floor_{k}"), RemeshMode::Uniform, Some(k as u64))?);
+    }
     let mut modes = Vec::new();
     for &mode in &opts.modes {
-        modes.push(simulate(mode.name(), mode, false)?);
+        modes.push(simulate(mode.name(), mode, None)?);
     }
     let bodies: Vec<ObstacleBody> = scene.obstacles.iter().map(ObstacleBody::new).collect();
-    for r in floor.iter_mut().chain(modes.iter_mut()) {
+    for r in floors.iter_mut().chain(modes.iter_mut()) {
+        if !opts.quiet {
+            eprintln!("compare: measuring {} against the reference", r.name);
+        }
         r.errors = Some(errors(&reference.dir, &r.dir, &ref_stats, &camera, &bodies, opts)?);
     }
-    let report =
-        CompareReport { scene: scene.name.clone(), frames, image: [opts.width, opts.height], reference, floor, modes };
+    let floor_errors: Vec<&Errors> = floors.iter().filter_map(|r| r.errors.as_ref()).collect();
+    let floor_band = floor_band(&floor_errors);
+    if let Some(band) = &floor_band {
+        for m in &mut modes {
+            m.verdicts = m.errors.as_ref().map(|e| verdicts(band, e));
+        }
+    }
+    let report = CompareReport {
+        scene: scene.name.clone(),
+        frames,
+        image: [opts.width, opts.height],
+        reference,
+        floors,
+        floor_band,
+        modes,
+    };
     write_report(&report, &opts.out_dir)?;
     Ok(report)
 }
 
-/// Moves every initial node by `FLOOR_PERTURBATION` in a direction fixed by its index
-/// (deterministic; no handle is exempt, the size is far below any tolerance).
-fn perturb_positions(scene: &mut Scene) {
+/// Moves every initial node by `FLOOR_PERTURBATION` in a direction fixed by its index and
+/// `seed` (SplitMix64 finaliser of both: deterministic, independent across seeds; no handle is
+/// exempt, the size is far below any tolerance).
+fn perturb_positions(scene: &mut Scene, seed: u64) {
     for (i, node) in scene.mesh.nodes.iter_mut().enumerate() {
         let h = |k: u64| {
-            let mut z = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(k);
+            let mut z = (i as u64)
+                .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                .wrapping_add(seed.wrapping_mul(0xD1B5_4A32_D192_ED03))
+                .wrapping_add(k);
             z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
             z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
             ((z ^ (z >> 31)) as Real / u64::MAX as Real) * 2.0 - 1.0
@@ -190,7 +212,7 @@ fn read_stats(dir: &Path) -> Result<RunStats, RunError> {
 
 fn run_report(name: &str, dir: PathBuf, stats: &RunStats) -> RunReport {
     let faces = stats.frames.iter().map(|f| f.faces as Real).sum::<Real>() / stats.frames.len().max(1) as Real;
-    RunReport { name: name.into(), dir, wall_s: stats.total_wall_s, mean_faces: faces, errors: None }
+    RunReport { name: name.into(), dir, wall_s: stats.total_wall_s, mean_faces: faces, errors: None, verdicts: None }
 }
 
 /// A frame's cloth: positions and triangles.
