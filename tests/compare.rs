@@ -99,6 +99,18 @@ fn compare_reports_errors_against_time_with_a_chaos_floor() {
     }
     let md = std::fs::read_to_string(out.join("compare.md")).unwrap();
     assert!(md.contains("| floor |") && md.contains("| adaptive |"), "{md}");
+    // Run again into the same folder: every finished run is reused, not re-simulated.
+    let o = viewcloth(&["compare", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--size", "320x180"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let log = String::from_utf8_lossy(&o.stderr);
+    for name in ["reference", "floor_1", "floor_2", "floor_3", "adaptive", "view"] {
+        assert!(log.contains(&format!("compare: {name}: reusing the finished run")), "{name}: {log}");
+    }
+    assert!(!log.contains(" run → "), "nothing simulated: {log}");
+    let again: Value = serde_json::from_str(&std::fs::read_to_string(out.join("compare.json")).unwrap()).unwrap();
+    assert_eq!(again["reference"]["wall_s"], r["reference"]["wall_s"]);
+    assert_eq!(again["modes"], r["modes"], "same runs, same errors");
+
     // The reference against a deterministic re-run of itself: exactly zero.
     let same = dir.join("same");
     let reference = out.join("reference");

@@ -137,11 +137,19 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
             perturb_positions(&mut s, seed);
         }
         let dir = opts.out_dir.join(name);
+        if let Some(stats) = finished_run(&dir, &s, opts.frames.unwrap_or(s.frames)) {
+            if !opts.quiet {
+                eprintln!("compare: {name}: reusing the finished run in {}", dir.display());
+            }
+            return Ok(run_report(name, dir, &stats));
+        }
         if !opts.quiet {
             eprintln!("compare: {name} run → {}", dir.display());
         }
-        // Obstacles exported: the frames are rasterised with them (and `render` shows them).
-        let run_opts = RunOptions { out_dir: dir.clone(), frames: opts.frames, quiet: true, export_obstacles: true };
+        // Obstacles exported: the frames are rasterised with them (and `render` shows them). The
+        // run's progress bar (on a terminal) unless quiet.
+        let run_opts =
+            RunOptions { out_dir: dir.clone(), frames: opts.frames, quiet: opts.quiet, export_obstacles: true };
         let stats = run(s, &run_opts)?;
         Ok(run_report(name, dir, &stats))
     };
@@ -204,6 +212,26 @@ fn perturb_positions(scene: &mut Scene, seed: u64) {
         let d = Vec3::new(h(1), h(2), h(3));
         node.x += d.try_normalize(0.0).unwrap_or_else(Vec3::x) * FLOOR_PERTURBATION;
     }
+}
+
+/// The stats of the run in `dir` when it is finished and matches the request: no error, the
+/// scene's name and remeshing mode, frames 0..=`frames` all listed, and the last frame's
+/// obstacles exported when the scene has obstacles. What the run's scene file held is not
+/// checked: delete the folder to force a re-run.
+fn finished_run(dir: &Path, scene: &Scene, frames: usize) -> Option<RunStats> {
+    let stats = run_dir::read_stats(dir).ok()?;
+    let mode = if scene.cloths.iter().any(|c| c.remesh.as_ref().is_some_and(|r| r.mode == RemeshMode::View)) {
+        "view"
+    } else if scene.cloths.iter().any(|c| c.remesh.as_ref().is_some_and(|r| r.mode.is_adaptive())) {
+        "adaptive"
+    } else {
+        "uniform"
+    };
+    let all_frames = stats.frames.len() == frames + 1 && stats.frames.iter().enumerate().all(|(k, f)| f.frame == k);
+    let matches = stats.error.is_none() && stats.scene == scene.name && stats.mode == mode && all_frames;
+    let files = RunFiles::scan(dir, frames, frames).ok()?;
+    let obstacles = scene.obstacles.is_empty() || files.obstacles(frames).ok()?.is_some();
+    (matches && obstacles && files.frame_path(frames).is_file()).then_some(stats)
 }
 
 fn read_stats(dir: &Path) -> Result<RunStats, RunError> {
@@ -288,7 +316,11 @@ fn errors(
     let ref_files = RunFiles::scan(reference, 1, last).map_err(RunError::Input)?;
     let files = RunFiles::scan(dir, 1, last).map_err(RunError::Input)?;
     let mut per_frame = Vec::new();
-    for f in (opts.every.max(1)..=last).step_by(opts.every.max(1)) {
+    let compared: Vec<usize> = (opts.every.max(1)..=last).step_by(opts.every.max(1)).collect();
+    for (k, &f) in compared.iter().enumerate() {
+        if !opts.quiet && (k + 1) % compared.len().div_ceil(10).max(1) == 0 {
+            eprintln!("compare: {}: frame {f} ({}/{} compared)", dir.display(), k + 1, compared.len());
+        }
         let time = ref_stats.frames[f].time;
         let (r, c) = (frame_mesh(&ref_files, f)?, frame_mesh(&files, f)?);
         let obstacles = obstacles(&ref_files, bodies, f, time)?;
