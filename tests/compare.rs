@@ -45,7 +45,9 @@ fn compare(args: &[&str]) -> Value {
     assert!(o.status.success(), "compare {args:?}: {}", String::from_utf8_lossy(&o.stderr));
     let out = args.iter().position(|a| *a == "--out").map(|i| PathBuf::from(args[i + 1])).unwrap();
     assert!(std::fs::read_to_string(out.join("compare.md")).unwrap().contains("| reference |"));
-    assert!(std::fs::read_to_string(out.join("compare.svg")).unwrap().starts_with("<svg"));
+    for svg in ["compare.svg", "compare_frames_normal_deg.svg", "compare_frames_distance_mean.svg"] {
+        assert!(std::fs::read_to_string(out.join(svg)).unwrap().starts_with("<svg"), "{svg}");
+    }
     serde_json::from_str(&std::fs::read_to_string(out.join("compare.json")).unwrap()).unwrap()
 }
 

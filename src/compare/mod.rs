@@ -35,7 +35,7 @@ use crate::scene::{RemeshMode, Scene};
 use crate::sim::{run, RunError, RunOptions};
 
 pub use floor::{floor_band, verdicts, FloorBand, MeasureBand, Verdict, MEASURES};
-pub use report::{markdown, svg_plot};
+pub use report::{markdown, svg_curves, svg_plot};
 
 /// Size (m) of the random displacement of every initial node in the chaos-floor runs.
 pub const FLOOR_PERTURBATION: Real = 1e-6;
@@ -367,5 +367,9 @@ fn write_report(report: &CompareReport, dir: &Path) -> Result<(), RunError> {
         .map_err(|e| RunError::Io { path: dir.join("compare.json"), source: std::io::Error::other(e.to_string()) })?;
     write("compare.json", json.as_bytes())?;
     write("compare.md", markdown(report).as_bytes())?;
-    write("compare.svg", svg_plot(report).as_bytes())
+    write("compare.svg", svg_plot(report).as_bytes())?;
+    for (k, m) in MEASURES.iter().enumerate().filter(|(_, m)| ["normal_deg", "distance_mean"].contains(&m.name)) {
+        write(&format!("compare_frames_{}.svg", m.name), svg_curves(report, k).as_bytes())?;
+    }
+    Ok(())
 }

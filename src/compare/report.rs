@@ -165,6 +165,83 @@ pub fn svg_plot(r: &CompareReport) -> String {
     s
 }
 
+/// One measure (`MEASURES[measure]`) per compared frame against the frame's time, a line per
+/// mode, with the floor band (per frame mean to mean + 2σ, shaded) when there is one.
+pub fn svg_curves(r: &CompareReport, measure: usize) -> String {
+    let m = &super::MEASURES[measure];
+    let (w, h, pad) = (640.0, 400.0, 60.0);
+    let curves: Vec<(&str, Vec<(Real, Real)>)> = r
+        .modes
+        .iter()
+        .filter_map(|run| {
+            let e = run.errors.as_ref()?;
+            Some((run.name.as_str(), e.per_frame.iter().map(|f| (f.time, (m.get)(f))).collect()))
+        })
+        .collect();
+    let band = r.floor_band.as_ref().map(|b| (b, &b.measures[measure]));
+    let times = |b: &super::FloorBand| -> Vec<Real> {
+        let first = r.floors.iter().find_map(|f| f.errors.as_ref());
+        b.frames
+            .iter()
+            .map(|&fr| first.and_then(|e| e.per_frame.iter().find(|p| p.frame == fr)).map_or(0.0, |p| p.time))
+            .collect()
+    };
+    let all = curves.iter().flat_map(|c| c.1.iter().copied());
+    let (t1, mut e1) = all.fold((0.0 as Real, 0.0 as Real), |(t, e), p| (t.max(p.0), e.max(p.1)));
+    if let Some((_, mb)) = band {
+        e1 = mb.per_frame_mean.iter().zip(&mb.per_frame_std).map(|(a, b)| a + 2.0 * b).fold(e1, Real::max);
+    }
+    let (t1, e1) = (t1.max(1e-6), if e1.is_finite() { e1.max(1e-12) * 1.1 } else { 1.0 });
+    let x = |t: Real| pad + t / t1 * (w - 2.0 * pad);
+    let y = |e: Real| h - pad - e.min(e1) / e1 * (h - 2.0 * pad);
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" font-family="sans-serif" font-size="12">"#
+    );
+    let _ = writeln!(s, r#"<rect width="{w}" height="{h}" fill="white"/>"#);
+    let _ = writeln!(s, r#"<path d="M{pad} {pad} V{} H{}" stroke="black" fill="none"/>"#, h - pad, w - pad);
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="25" text-anchor="middle">{}: {} per frame</text>"#,
+        w / 2.0,
+        xml_escape(&r.scene),
+        m.name
+    );
+    let _ = writeln!(s, r#"<text x="{}" y="{}" text-anchor="middle">time (s)</text>"#, w / 2.0, h - 15.0);
+    let _ = writeln!(s, r#"<text x="{}" y="{}" text-anchor="middle">{t1:.2}</text>"#, x(t1), h - pad + 16.0);
+    let _ = writeln!(s, r#"<text x="{}" y="{:.1}" text-anchor="end">{}</text>"#, pad - 5.0, y(e1) + 4.0, num(e1));
+    let _ = writeln!(s, r#"<text x="{}" y="{:.1}" text-anchor="end">0</text>"#, pad - 5.0, y(0.0) + 4.0);
+    if let Some((b, mb)) = band {
+        let ts = times(b);
+        let top = ts.iter().zip(mb.per_frame_mean.iter().zip(&mb.per_frame_std)).map(|(&t, (a, d))| (t, a + 2.0 * d));
+        let bottom = ts.iter().zip(&mb.per_frame_mean).rev().map(|(&t, &a)| (t, a));
+        let pts: Vec<String> = top.chain(bottom).map(|(t, e)| format!("{:.1},{:.1}", x(t), y(e))).collect();
+        let _ = writeln!(s, r#"<polygon points="{}" fill="gray" fill-opacity="0.3"/>"#, pts.join(" "));
+        let _ = writeln!(
+            s,
+            r#"<text x="{}" y="{}" text-anchor="end" fill="gray">chaos floor band</text>"#,
+            w - pad,
+            pad - 5.0
+        );
+    }
+    const COLOURS: [&str; 4] = ["steelblue", "darkorange", "seagreen", "crimson"];
+    for (k, (name, pts)) in curves.iter().enumerate() {
+        let colour = COLOURS[k % COLOURS.len()];
+        let p: Vec<String> = pts.iter().map(|&(t, e)| format!("{:.1},{:.1}", x(t), y(e))).collect();
+        let _ = writeln!(s, r#"<polyline points="{}" fill="none" stroke="{colour}"/>"#, p.join(" "));
+        let _ = writeln!(
+            s,
+            r#"<text x="{}" y="{}" fill="{colour}">{}</text>"#,
+            pad + 10.0,
+            pad + 15.0 * (k + 1) as Real,
+            xml_escape(name)
+        );
+    }
+    s.push_str("</svg>\n");
+    s
+}
+
 /// `text` with the five characters XML reserves replaced by their entities (XML 1.0 §2.4), for
 /// element content and attribute values alike.
 fn xml_escape(text: &str) -> Cow<'_, str> {
@@ -237,5 +314,12 @@ mod tests {
         assert!(texts.contains(&"it's <odd> & \"new\""), "{texts:?}");
         assert!(texts.contains(&"adaptive") && texts.contains(&"reference"), "{texts:?}");
         assert!(texts.contains(&"chaos floor (mean to mean + 2σ)"), "{texts:?}");
+        // The per-frame curves: one polyline per mode with a point per frame, and the band.
+        let svg = svg_curves(&report, 0);
+        let doc = roxmltree::Document::parse(&svg).unwrap_or_else(|e| panic!("{e}\n{svg}"));
+        let lines: Vec<_> = doc.descendants().filter(|n| n.has_tag_name("polyline")).collect();
+        assert_eq!(lines.len(), 2);
+        assert!(lines.iter().all(|l| l.attribute("points").unwrap().split(' ').count() == 1));
+        assert_eq!(doc.descendants().filter(|n| n.has_tag_name("polygon")).count(), 1);
     }
 }
