@@ -125,10 +125,19 @@ fn compare_reports_errors_against_time_with_a_chaos_floor() {
         reference.to_str().unwrap(),
         "--modes",
         "uniform",
+        "--sweep",
         "--size",
         "320x180",
         "--quiet",
     ]);
+    // The sweep: uniform meshes at 2x and 4x the minimum edge, about 4x fewer faces each, with
+    // an error.
+    let names: Vec<&str> = r["modes"].as_array().unwrap().iter().map(|m| m["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["uniform", "uniform_2x", "uniform_4x"]);
+    let faces: Vec<f64> = r["modes"].as_array().unwrap().iter().map(|m| m["mean_faces"].as_f64().unwrap()).collect();
+    assert!((2.5..6.0).contains(&(faces[0] / faces[1])) && (2.5..6.0).contains(&(faces[1] / faces[2])), "{faces:?}");
+    assert!(err(&r["modes"][2], "geometric", "mean") > err(&r["modes"][1], "geometric", "mean"), "{r}");
+    assert!(err(&r["modes"][1], "geometric", "mean") > 0.0);
     assert_eq!(r["floors"].as_array().unwrap().len(), 0, "no floor with a given reference");
     assert!(r["floor_band"].is_null());
     let run = &r["modes"][0];

@@ -140,6 +140,10 @@ pub struct CompareArgs {
     /// Skip the chaos-floor runs.
     #[arg(long)]
     pub no_floor: bool,
+    /// Also run uniform meshes at 2x and 4x the minimum edge length (points on the
+    /// error-against-time plot that a coarser uniform mesh would give).
+    #[arg(long)]
+    pub sweep: bool,
     /// Image size of the visible error, WIDTHxHEIGHT.
     #[arg(long, default_value = "960x540")]
     pub size: String,

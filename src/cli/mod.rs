@@ -164,6 +164,7 @@ pub fn compare_modes(args: CompareArgs) -> Result<(), CliError> {
         modes: args.modes.iter().filter_map(|m| RemeshMode::parse(m)).collect(),
         reference: args.reference,
         floor_runs: if args.no_floor { 0 } else { args.floor_runs as usize },
+        sweep: args.sweep,
         width,
         height,
         every: args.every as usize,

@@ -41,6 +41,8 @@ pub use report::{markdown, svg_curves, svg_plot};
 pub const FLOOR_PERTURBATION: Real = 1e-6;
 /// Floor runs by default (`--floor-runs`).
 pub const FLOOR_RUNS: usize = 3;
+/// Edge-length multiples of the `--sweep` uniform runs.
+pub const SWEEP: [Real; 2] = [2.0, 4.0];
 
 /// What `compare` runs and measures.
 #[derive(Clone, Debug)]
@@ -55,6 +57,8 @@ pub struct CompareOptions {
     pub reference: Option<PathBuf>,
     /// Chaos-floor runs (the reference from independently perturbed positions); 0 for none.
     pub floor_runs: usize,
+    /// Also run uniform meshes at `SWEEP` times the minimum edge length (`uniform_2x`, …).
+    pub sweep: bool,
     /// Rasterised image size (pixels).
     pub width: usize,
     pub height: usize,
@@ -124,34 +128,43 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
         }));
     };
     std::fs::create_dir_all(&opts.out_dir).map_err(|source| RunError::Io { path: opts.out_dir.clone(), source })?;
-    let simulate = |name: &str, mode: RemeshMode, perturb: Option<u64>| -> Result<RunReport, RunError> {
-        let mut s = scene.clone();
-        if s.set_remesh_mode(mode) == 0 && mode != RemeshMode::Uniform {
-            return Err(RunError::Input(InputError {
-                file: s.file.clone(),
-                location: None,
-                msg: format!("scene '{}' has no cloth with a remesh block to run in {name} mode", s.name),
-            }));
-        }
-        if let Some(seed) = perturb {
-            perturb_positions(&mut s, seed);
-        }
-        let dir = opts.out_dir.join(name);
-        if let Some(stats) = finished_run(&dir, &s, opts.frames.unwrap_or(s.frames)) {
-            if !opts.quiet {
-                eprintln!("compare: {name}: reusing the finished run in {}", dir.display());
+    // `edge` scales every cloth's minimum edge length (the uniform runs of the sweep).
+    let simulate_scaled =
+        |name: &str, mode: RemeshMode, perturb: Option<u64>, edge: Real| -> Result<RunReport, RunError> {
+            let mut s = scene.clone();
+            for r in s.cloths.iter_mut().filter_map(|c| c.remesh.as_mut()) {
+                r.sizing.size_min *= edge;
+                r.sizing.size_max = r.sizing.size_max.max(r.sizing.size_min);
             }
-            return Ok(run_report(name, dir, &stats));
-        }
-        if !opts.quiet {
-            eprintln!("compare: {name} run → {}", dir.display());
-        }
-        // Obstacles exported: the frames are rasterised with them (and `render` shows them). The
-        // run's progress bar (on a terminal) unless quiet.
-        let run_opts =
-            RunOptions { out_dir: dir.clone(), frames: opts.frames, quiet: opts.quiet, export_obstacles: true };
-        let stats = run(s, &run_opts)?;
-        Ok(run_report(name, dir, &stats))
+            if s.set_remesh_mode(mode) == 0 && mode != RemeshMode::Uniform {
+                return Err(RunError::Input(InputError {
+                    file: s.file.clone(),
+                    location: None,
+                    msg: format!("scene '{}' has no cloth with a remesh block to run in {name} mode", s.name),
+                }));
+            }
+            if let Some(seed) = perturb {
+                perturb_positions(&mut s, seed);
+            }
+            let dir = opts.out_dir.join(name);
+            if let Some(stats) = finished_run(&dir, &s, opts.frames.unwrap_or(s.frames)) {
+                if !opts.quiet {
+                    eprintln!("compare: {name}: reusing the finished run in {}", dir.display());
+                }
+                return Ok(run_report(name, dir, &stats));
+            }
+            if !opts.quiet {
+                eprintln!("compare: {name} run → {}", dir.display());
+            }
+            // Obstacles exported: the frames are rasterised with them (and `render` shows them). The
+            // run's progress bar (on a terminal) unless quiet.
+            let run_opts =
+                RunOptions { out_dir: dir.clone(), frames: opts.frames, quiet: opts.quiet, export_obstacles: true };
+            let stats = run(s, &run_opts)?;
+            Ok(run_report(name, dir, &stats))
+        };
+    let simulate = |name: &str, mode: RemeshMode, perturb: Option<u64>| -> Result<RunReport, RunError> {
+        simulate_scaled(name, mode, perturb, 1.0)
     };
     let reference = match &opts.reference {
         Some(dir) => run_report("reference", dir.clone(), &read_stats(dir)?),
@@ -167,6 +180,9 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
     let mut modes = Vec::new();
     for &mode in &opts.modes {
         modes.push(simulate(mode.name(), mode, None)?);
+    }
+    for k in SWEEP.iter().filter(|_| opts.sweep) {
+        modes.push(simulate_scaled(&format!("uniform_{k}x"), RemeshMode::Uniform, None, *k)?);
     }
     let bodies: Vec<ObstacleBody> = scene.obstacles.iter().map(ObstacleBody::new).collect();
     for r in floors.iter_mut().chain(modes.iter_mut()) {
