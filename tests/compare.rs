@@ -99,6 +99,12 @@ fn compare_reports_errors_against_time_with_a_chaos_floor() {
             }
         }
     }
+    // Strips for the first, middle and last compared frames: reference | run | heat map.
+    for f in [1, 6, 12] {
+        let png = std::fs::read(out.join("adaptive").join(format!("strip_{f:04}.png"))).unwrap();
+        // IHDR: width and height, big-endian, at bytes 16..24.
+        assert_eq!(png[16..24], [0, 0, 3, 192, 0, 0, 0, 180], "960 × 180");
+    }
     let md = std::fs::read_to_string(out.join("compare.md")).unwrap();
     assert!(md.contains("| floor |") && md.contains("| adaptive |"), "{md}");
     // Run again into the same folder: every finished run is reused, not re-simulated.

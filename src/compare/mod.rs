@@ -17,6 +17,7 @@
 
 mod floor;
 mod report;
+mod strip;
 
 use std::path::{Path, PathBuf};
 
@@ -303,7 +304,7 @@ fn frame_errors(
     obstacles: &FrameMeshes,
     view: &crate::camera::View,
     opts: &CompareOptions,
-) -> (VisibleError, SurfaceDistance, SurfaceDistance) {
+) -> (VisibleError, SurfaceDistance, SurfaceDistance, [FrameImage; 2]) {
     let (ir, ic) = (frame_image(reference, obstacles, view, opts), frame_image(candidate, obstacles, view, opts));
     let vis = visible_error(&ir, &ic);
     let all = surface_distance(surface(reference, None), surface(candidate, None));
@@ -311,7 +312,7 @@ fn frame_errors(
         surface(reference, Some(&ir.visible_fraction[..])),
         surface(candidate, Some(&ic.visible_fraction[..])),
     );
-    (vis, all, seen)
+    (vis, all, seen, [ir, ic])
 }
 
 fn surface<'a>(m: &'a ClothMesh, weight: Option<&'a [Real]>) -> Surface<'a> {
@@ -333,6 +334,7 @@ fn errors(
     let files = RunFiles::scan(dir, 1, last).map_err(RunError::Input)?;
     let mut per_frame = Vec::new();
     let compared: Vec<usize> = (opts.every.max(1)..=last).step_by(opts.every.max(1)).collect();
+    let strips = strip::strip_frames(&compared);
     for (k, &f) in compared.iter().enumerate() {
         if !opts.quiet && (k + 1) % compared.len().div_ceil(10).max(1) == 0 {
             eprintln!("compare: {}: frame {f} ({}/{} compared)", dir.display(), k + 1, compared.len());
@@ -340,10 +342,38 @@ fn errors(
         let time = ref_stats.frames[f].time;
         let (r, c) = (frame_mesh(&ref_files, f)?, frame_mesh(&files, f)?);
         let obstacles = obstacles(&ref_files, bodies, f, time)?;
-        let (visible, geometric, geometric_visible) = frame_errors(&r, &c, &obstacles, &camera.view_at(time), opts);
+        let view = camera.view_at(time);
+        let (visible, geometric, geometric_visible, [ir, ic]) = frame_errors(&r, &c, &obstacles, &view, opts);
+        if strips.contains(&f) {
+            write_strip(&files.frame_path(f), [&r, &c], &obstacles, &view, [&ir, &ic], opts)?;
+        }
         per_frame.push(FrameErrors { frame: f, time, visible, geometric, geometric_visible });
     }
     Ok(mean(per_frame))
+}
+
+/// Writes `strip_NNNN.png` next to the run's frame `frame_obj`: reference | run | heat map.
+fn write_strip(
+    frame_obj: &Path,
+    cloths: [&ClothMesh; 2],
+    obstacles: &FrameMeshes,
+    view: &crate::camera::View,
+    images: [&FrameImage; 2],
+    opts: &CompareOptions,
+) -> Result<(), RunError> {
+    let (w, h) = (opts.width, opts.height);
+    let render = |cloth: &ClothMesh| {
+        let mut all = FrameMeshes::default();
+        all.append(cloth.0.clone(), cloth.1.clone());
+        all.cloth_triangles = cloth.1.len();
+        all.append(obstacles.positions.clone(), obstacles.triangles.clone());
+        crate::render::render_frame(&all, view, w, h, crate::render::Colouring::Shade)
+    };
+    let (r, c, heat) = (render(cloths[0]), render(cloths[1]), strip::heat_map(images[0], images[1]));
+    let png = crate::render::png::encode(3 * w, h, &strip::side_by_side([&r, &c, &heat], w, h));
+    let name = frame_obj.file_name().map_or_else(String::new, |n| n.to_string_lossy().replace("frame_", "strip_"));
+    let path = frame_obj.with_file_name(name.replace(".obj", ".png"));
+    crate::io::write_atomic(&path, &png).map_err(|source| RunError::Io { path, source })
 }
 
 /// Means over the frames (counts too, rounded down), with the frames kept.
