@@ -1,8 +1,9 @@
 //! `viewcloth compare` (DESIGN.md "Error against run time") on a small hanging sheet: the report
-//! has the reference, the chaos floor and every mode with finite errors; a run identical to the
-//! reference measures exactly zero error while the perturbed floor does not; the view mode,
-//! whose camera sees half the sheet, uses fewer faces than adaptive; without a camera the
-//! command is refused in one line.
+//! has the reference, three independent floor runs with their band, and every mode with
+//! per-frame errors and a verdict per measure that follows from the band; a run identical to the
+//! reference measures exactly zero in every measure and frame while the perturbed floors do not;
+//! the view mode, whose camera sees half the sheet, uses fewer faces than adaptive; without a
+//! camera the command is refused in one line.
 
 use std::path::{Path, PathBuf};
 
@@ -44,7 +45,9 @@ fn compare(args: &[&str]) -> Value {
     assert!(o.status.success(), "compare {args:?}: {}", String::from_utf8_lossy(&o.stderr));
     let out = args.iter().position(|a| *a == "--out").map(|i| PathBuf::from(args[i + 1])).unwrap();
     assert!(std::fs::read_to_string(out.join("compare.md")).unwrap().contains("| reference |"));
-    assert!(std::fs::read_to_string(out.join("compare.svg")).unwrap().starts_with("<svg"));
+    for svg in ["compare.svg", "compare_frames_normal_deg.svg", "compare_frames_distance_mean.svg"] {
+        assert!(std::fs::read_to_string(out.join(svg)).unwrap().starts_with("<svg"), "{svg}");
+    }
     serde_json::from_str(&std::fs::read_to_string(out.join("compare.json")).unwrap()).unwrap()
 }
 
@@ -63,22 +66,58 @@ fn compare_reports_errors_against_time_with_a_chaos_floor() {
     let modes = r["modes"].as_array().unwrap();
     let names: Vec<&str> = modes.iter().map(|m| m["name"].as_str().unwrap()).collect();
     assert_eq!(names, ["adaptive", "view"]);
-    let floor = &r["floor"];
-    for run in modes.iter().chain([floor]) {
+    let floors = r["floors"].as_array().unwrap();
+    let floor_names: Vec<&str> = floors.iter().map(|f| f["name"].as_str().unwrap()).collect();
+    assert_eq!(floor_names, ["floor_1", "floor_2", "floor_3"], "three floor runs by default");
+    for run in modes.iter().chain(floors) {
         assert!(run["wall_s"].as_f64().unwrap() > 0.0);
         assert_eq!(run["errors"]["frames_compared"], 12);
-        for (field, m) in
-            [("visible", "normal_deg"), ("visible", "silhouette"), ("geometric", "mean"), ("geometric", "p95")]
-        {
-            let e = err(run, field, m);
-            assert!(e.is_finite() && e >= 0.0, "{} {field}.{m} = {e}", run["name"]);
+        assert_eq!(run["errors"]["per_frame"].as_array().unwrap().len(), 12);
+    }
+    // Independent jitters: the floor runs differ from each other, and a 1 µm perturbation grows
+    // but stays far below a centimetre on this calm shot.
+    let floor_means: Vec<f64> = floors.iter().map(|f| err(f, "geometric", "mean")).collect();
+    assert!(floor_means.iter().all(|&m| m > 0.0 && m < 0.01), "{floor_means:?}");
+    assert!(floor_means[0] != floor_means[1] && floor_means[1] != floor_means[2], "{floor_means:?}");
+    // The band is the floor runs' mean and spread, and every mode's verdict follows from it.
+    let band = &r["floor_band"];
+    assert_eq!(band["runs"], 3);
+    let measures = band["measures"].as_array().unwrap();
+    let distance = measures.iter().find(|m| m["measure"] == "distance_mean").unwrap();
+    let mean = floor_means.iter().sum::<f64>() / 3.0;
+    let std = (floor_means.iter().map(|m| (m - mean).powi(2)).sum::<f64>() / 2.0).sqrt();
+    assert!((distance["mean"].as_f64().unwrap() - mean).abs() < 1e-12 * mean, "{distance}");
+    assert!((distance["std"].as_f64().unwrap() - std).abs() < 1e-9 * mean, "{distance}");
+    for mode in modes {
+        let verdicts = mode["verdicts"].as_array().unwrap();
+        assert_eq!(verdicts.len(), measures.len(), "a verdict for every measure");
+        for (v, b) in verdicts.iter().zip(measures) {
+            let (e, mu, sd) = (v["error"].as_f64().unwrap(), b["mean"].as_f64().unwrap(), b["std"].as_f64().unwrap());
+            assert_eq!(v["within"].as_bool().unwrap(), e <= mu + 2.0 * sd, "{v} against {b}");
+            if mu > 0.0 {
+                assert!((v["multiple"].as_f64().unwrap() - e / mu).abs() < 1e-9 * (e / mu), "{v}");
+            }
         }
     }
-    // A 1 µm perturbation grows, but stays far below a centimetre on this calm shot.
-    let floor_mean = err(floor, "geometric", "mean");
-    assert!(floor_mean > 0.0 && floor_mean < 0.01, "floor distance {floor_mean}");
-    let faces = |k: usize| modes[k]["mean_faces"].as_f64().unwrap();
-    assert!(faces(1) < faces(0), "view {} vs adaptive {} faces", faces(1), faces(0));
+    // Strips for the first, middle and last compared frames: reference | run | heat map.
+    for f in [1, 6, 12] {
+        let png = std::fs::read(out.join("adaptive").join(format!("strip_{f:04}.png"))).unwrap();
+        // IHDR: width and height, big-endian, at bytes 16..24.
+        assert_eq!(png[16..24], [0, 0, 3, 192, 0, 0, 0, 180], "960 × 180");
+    }
+    let md = std::fs::read_to_string(out.join("compare.md")).unwrap();
+    assert!(md.contains("| floor |") && md.contains("| adaptive |"), "{md}");
+    // Run again into the same folder: every finished run is reused, not re-simulated.
+    let o = viewcloth(&["compare", scene.to_str().unwrap(), "--out", out.to_str().unwrap(), "--size", "320x180"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let log = String::from_utf8_lossy(&o.stderr);
+    for name in ["reference", "floor_1", "floor_2", "floor_3", "adaptive", "view"] {
+        assert!(log.contains(&format!("compare: {name}: reusing the finished run")), "{name}: {log}");
+    }
+    assert!(!log.contains(" run → "), "nothing simulated: {log}");
+    let again: Value = serde_json::from_str(&std::fs::read_to_string(out.join("compare.json")).unwrap()).unwrap();
+    assert_eq!(again["reference"]["wall_s"], r["reference"]["wall_s"]);
+    assert_eq!(again["modes"], r["modes"], "same runs, same errors");
 
     // The reference against a deterministic re-run of itself: exactly zero.
     let same = dir.join("same");
@@ -92,18 +131,41 @@ fn compare_reports_errors_against_time_with_a_chaos_floor() {
         reference.to_str().unwrap(),
         "--modes",
         "uniform",
+        "--sweep",
         "--size",
         "320x180",
         "--quiet",
     ]);
-    assert!(r["floor"].is_null(), "no floor with a given reference");
+    // The sweep: uniform meshes at 2x and 4x the minimum edge, about 4x fewer faces each, with
+    // an error.
+    let names: Vec<&str> = r["modes"].as_array().unwrap().iter().map(|m| m["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["uniform", "uniform_2x", "uniform_4x"]);
+    let faces: Vec<f64> = r["modes"].as_array().unwrap().iter().map(|m| m["mean_faces"].as_f64().unwrap()).collect();
+    assert!((2.5..6.0).contains(&(faces[0] / faces[1])) && (2.5..6.0).contains(&(faces[1] / faces[2])), "{faces:?}");
+    assert!(err(&r["modes"][2], "geometric", "mean") > err(&r["modes"][1], "geometric", "mean"), "{r}");
+    assert!(err(&r["modes"][1], "geometric", "mean") > 0.0);
+    assert_eq!(r["floors"].as_array().unwrap().len(), 0, "no floor with a given reference");
+    assert!(r["floor_band"].is_null());
     let run = &r["modes"][0];
-    // Identical frames: identical images; surface distances at rounding level.
-    for (field, m) in [("visible", "silhouette"), ("visible", "depth")] {
-        assert_eq!(err(run, field, m), 0.0, "{field}.{m}");
+    // Identical frames: every measure exactly zero, in every frame.
+    assert_every_error_is_zero(run);
+}
+
+/// Every measure of `run`, mean and per frame, is exactly 0.
+fn assert_every_error_is_zero(run: &Value) {
+    let e = &run["errors"];
+    let frames = e["per_frame"].as_array().unwrap();
+    assert!(!frames.is_empty());
+    for set in [e].into_iter().chain(frames) {
+        for m in ["normal_deg", "normal_flat_deg", "silhouette", "depth"] {
+            assert_eq!(set["visible"][m].as_f64(), Some(0.0), "visible.{m}: {set}");
+        }
+        for field in ["geometric", "geometric_visible"] {
+            for m in ["mean", "rms", "p95", "max"] {
+                assert_eq!(set[field][m].as_f64(), Some(0.0), "{field}.{m}: {set}");
+            }
+        }
     }
-    assert!(err(run, "visible", "normal_deg") < 1e-6, "{}", err(run, "visible", "normal_deg"));
-    assert!(err(run, "geometric", "p95") < 1e-12, "{}", err(run, "geometric", "p95"));
 }
 
 #[test]

@@ -171,9 +171,16 @@ pub struct CompareArgs {
     /// adaptive minimum edge length, simulated here). No chaos floor is run then.
     #[arg(long, value_name = "DIR")]
     pub reference: Option<PathBuf>,
-    /// Skip the chaos-floor run (the reference re-run from perturbed positions).
+    /// Chaos-floor runs: the reference re-run from independently perturbed positions.
+    #[arg(long, value_name = "K", default_value_t = 3, value_parser = clap::value_parser!(u64).range(1..=100))]
+    pub floor_runs: u64,
+    /// Skip the chaos-floor runs.
     #[arg(long)]
     pub no_floor: bool,
+    /// Also run uniform meshes at 2x and 4x the minimum edge length (points on the
+    /// error-against-time plot that a coarser uniform mesh would give).
+    #[arg(long)]
+    pub sweep: bool,
     /// Image size of the visible error, WIDTHxHEIGHT.
     #[arg(long, default_value = "960x540")]
     pub size: String,

@@ -3,36 +3,47 @@
 //!
 //! The reference is the uniform mesh at the adaptive minimum edge length (or a run the user
 //! names). Cloth is chaotic: runs that differ by rounding grow different wrinkles, so the
-//! reference is also re-run from positions perturbed by `FLOOR_PERTURBATION`, and that pair's
-//! error, the chaos floor, is what an error should be compared with: each mode's error is also
-//! given as a multiple of it.
+//! reference is also re-run K times from positions independently perturbed by
+//! `FLOOR_PERTURBATION`, and those runs' errors, the chaos floor with its spread (`floor`), are
+//! what an error should be compared with: each mode gets, per measure, a multiple of the floor
+//! and a verdict (within the band, or how many standard deviations above).
 //!
-//! Per compared frame: visible error (both meshes rasterised from the camera at that frame's
-//! time: normal angle, silhouette mismatch, relative depth) and geometric error (two-sided
-//! surface distance, over all cloth and over the faces the camera sees); per run, their means
-//! over the frames, with the wall time and mean face count.
+//! Per compared frame, the cloth and the obstacles (exported by the runs, or re-posed from the
+//! scene) are rasterised from the camera at that frame's time: visible error over the pixels
+//! where cloth is in front (shading and flat normal angle, silhouette mismatch, relative depth)
+//! and geometric error (two-sided distance between the densely sampled surfaces, over all cloth
+//! and weighted by each triangle's visible pixel fraction); per run, every frame's errors and
+//! their means, with the wall time and mean face count.
 
+mod floor;
 mod report;
+mod strip;
 
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
 use crate::camera::Camera;
+use crate::collision::obstacle::ObstacleBody;
 use crate::error::InputError;
 use crate::io::obj::read_obj;
 use crate::io::stats::RunStats;
 use crate::math::{Real, Vec3};
-use crate::metrics::{rasterize, surface_distance, visible_error, visible_triangles, Surface};
+use crate::metrics::{surface_distance, visible_error, FrameImage, Surface};
 use crate::metrics::{SurfaceDistance, VisibleError};
-use crate::render::run_dir::{self, RunFiles};
+use crate::render::run_dir::{self, FrameMeshes, RunFiles};
 use crate::scene::{RemeshMode, Scene};
 use crate::sim::{run, RunError, RunOptions};
 
-pub use report::{markdown, svg_plot};
+pub use floor::{floor_band, verdicts, FloorBand, MeasureBand, Verdict, MEASURES};
+pub use report::{markdown, svg_curves, svg_plot};
 
-/// Size (m) of the random displacement of every initial node in the chaos-floor run.
+/// Size (m) of the random displacement of every initial node in the chaos-floor runs.
 pub const FLOOR_PERTURBATION: Real = 1e-6;
+/// Floor runs by default (`--floor-runs`).
+pub const FLOOR_RUNS: usize = 3;
+/// Edge-length multiples of the `--sweep` uniform runs.
+pub const SWEEP: [Real; 2] = [2.0, 4.0];
 
 /// What `compare` runs and measures.
 #[derive(Clone, Debug)]
@@ -45,8 +56,10 @@ pub struct CompareOptions {
     pub modes: Vec<RemeshMode>,
     /// An existing run directory to use as the reference instead of simulating one.
     pub reference: Option<PathBuf>,
-    /// Also run the chaos floor (a perturbed reference).
-    pub floor: bool,
+    /// Chaos-floor runs (the reference from independently perturbed positions); 0 for none.
+    pub floor_runs: usize,
+    /// Also run uniform meshes at `SWEEP` times the minimum edge length (`uniform_2x`, …).
+    pub sweep: bool,
     /// Rasterised image size (pixels).
     pub width: usize,
     pub height: usize,
@@ -55,15 +68,28 @@ pub struct CompareOptions {
     pub quiet: bool,
 }
 
-/// The error of one run against the reference, averaged over the compared frames.
+/// The error of one run against the reference in one frame.
+#[derive(Clone, Debug, Default, Serialize)]
+pub struct FrameErrors {
+    pub frame: usize,
+    pub time: Real,
+    pub visible: VisibleError,
+    /// Over all cloth.
+    pub geometric: SurfaceDistance,
+    /// Each triangle weighted by its visible pixel fraction (in its own run's image).
+    pub geometric_visible: SurfaceDistance,
+}
+
+/// The error of one run against the reference, averaged over the compared frames, and per frame.
 #[derive(Clone, Debug, Default, Serialize)]
 pub struct Errors {
     pub visible: VisibleError,
     /// Over all cloth.
     pub geometric: SurfaceDistance,
-    /// Over the faces the camera sees (in either run).
+    /// Each triangle weighted by its visible pixel fraction (in its own run's image).
     pub geometric_visible: SurfaceDistance,
     pub frames_compared: usize,
+    pub per_frame: Vec<FrameErrors>,
 }
 
 /// One run: its cost and, except for the reference, its error.
@@ -75,6 +101,8 @@ pub struct RunReport {
     pub wall_s: Real,
     pub mean_faces: Real,
     pub errors: Option<Errors>,
+    /// Every measure against the floor band (modes only, when there is a floor).
+    pub verdicts: Option<Vec<Verdict>>,
 }
 
 #[derive(Clone, Debug, Serialize)]
@@ -83,22 +111,11 @@ pub struct CompareReport {
     pub frames: usize,
     pub image: [usize; 2],
     pub reference: RunReport,
-    /// The perturbed reference: its error is the chaos floor.
-    pub floor: Option<RunReport>,
+    /// The perturbed references (`floor_1`, `floor_2`, …): their errors are the chaos floor.
+    pub floors: Vec<RunReport>,
+    /// The floor's mean and spread per measure, per frame and over the run.
+    pub floor_band: Option<FloorBand>,
     pub modes: Vec<RunReport>,
-}
-
-impl CompareReport {
-    /// `e / floor` for each error measure, when there is a floor.
-    pub fn floor_multiple(&self, e: &Errors) -> Option<[Real; 3]> {
-        let f = self.floor.as_ref()?.errors.as_ref()?;
-        let ratio = |a: Real, b: Real| if b > 0.0 { a / b } else { Real::INFINITY };
-        Some([
-            ratio(e.visible.normal_deg, f.visible.normal_deg),
-            ratio(e.visible.silhouette, f.visible.silhouette),
-            ratio(e.geometric.mean, f.geometric.mean),
-        ])
-    }
 }
 
 /// Runs the shot in every mode (and the reference and floor unless given or off), measures the
@@ -112,53 +129,99 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
         }));
     };
     std::fs::create_dir_all(&opts.out_dir).map_err(|source| RunError::Io { path: opts.out_dir.clone(), source })?;
-    let simulate = |name: &str, mode: RemeshMode, perturb: bool| -> Result<RunReport, RunError> {
-        let mut s = scene.clone();
-        if s.set_remesh_mode(mode) == 0 && mode != RemeshMode::Uniform {
-            return Err(RunError::Input(InputError {
-                file: s.file.clone(),
-                location: None,
-                msg: format!("scene '{}' has no cloth with a remesh block to run in {name} mode", s.name),
-            }));
-        }
-        if perturb {
-            perturb_positions(&mut s);
-        }
-        let dir = opts.out_dir.join(name);
-        if !opts.quiet {
-            eprintln!("compare: {name} run → {}", dir.display());
-        }
-        let run_opts = RunOptions { out_dir: dir.clone(), frames: opts.frames, quiet: true, export_obstacles: false };
-        let stats = run(s, &run_opts)?;
-        Ok(run_report(name, dir, &stats))
+    // `edge` scales every cloth's minimum edge length (the uniform runs of the sweep).
+    let simulate_scaled =
+        |name: &str, mode: RemeshMode, perturb: Option<u64>, edge: Real| -> Result<RunReport, RunError> {
+            let mut s = scene.clone();
+            for r in s.cloths.iter_mut().filter_map(|c| c.remesh.as_mut()) {
+                r.sizing.size_min *= edge;
+                r.sizing.size_max = r.sizing.size_max.max(r.sizing.size_min);
+            }
+            if s.set_remesh_mode(mode) == 0 && mode != RemeshMode::Uniform {
+                return Err(RunError::Input(InputError {
+                    file: s.file.clone(),
+                    location: None,
+                    msg: format!("scene '{}' has no cloth with a remesh block to run in {name} mode", s.name),
+                }));
+            }
+            if let Some(seed) = perturb {
+                perturb_positions(&mut s, seed);
+            }
+            let dir = opts.out_dir.join(name);
+            if let Some(stats) = finished_run(&dir, &s, opts.frames.unwrap_or(s.frames)) {
+                if !opts.quiet {
+                    eprintln!("compare: {name}: reusing the finished run in {}", dir.display());
+                }
+                return Ok(run_report(name, dir, &stats));
+            }
+            if !opts.quiet {
+                eprintln!("compare: {name} run → {}", dir.display());
+            }
+            // Obstacles exported: the frames are rasterised with them (and `render` shows them). The
+            // run's progress bar (on a terminal) unless quiet.
+            let run_opts =
+                RunOptions { out_dir: dir.clone(), frames: opts.frames, quiet: opts.quiet, export_obstacles: true };
+            let stats = run(s, &run_opts)?;
+            Ok(run_report(name, dir, &stats))
+        };
+    let simulate = |name: &str, mode: RemeshMode, perturb: Option<u64>| -> Result<RunReport, RunError> {
+        simulate_scaled(name, mode, perturb, 1.0)
     };
     let reference = match &opts.reference {
         Some(dir) => run_report("reference", dir.clone(), &read_stats(dir)?),
-        None => simulate("reference", RemeshMode::Uniform, false)?,
+        None => simulate("reference", RemeshMode::Uniform, None)?,
     };
     let ref_stats = read_stats(&reference.dir)?;
     let frames = ref_stats.frames.len().saturating_sub(1);
-    let mut floor =
-        if opts.floor && opts.reference.is_none() { Some(simulate("floor", RemeshMode::Uniform, true)?) } else { None };
+    let floor_runs = if opts.reference.is_none() { opts.floor_runs } else { 0 };
+    let mut floors = Vec::new();
+    for k in 1..=floor_runs {
+        floors.push(simulate(&format!("floor_{k}"), RemeshMode::Uniform, Some(k as u64))?);
+    }
     let mut modes = Vec::new();
     for &mode in &opts.modes {
-        modes.push(simulate(mode.name(), mode, false)?);
+        modes.push(simulate(mode.name(), mode, None)?);
     }
-    for r in floor.iter_mut().chain(modes.iter_mut()) {
-        r.errors = Some(errors(&reference.dir, &r.dir, &ref_stats, &camera, opts)?);
+    for k in SWEEP.iter().filter(|_| opts.sweep) {
+        modes.push(simulate_scaled(&format!("uniform_{k}x"), RemeshMode::Uniform, None, *k)?);
     }
-    let report =
-        CompareReport { scene: scene.name.clone(), frames, image: [opts.width, opts.height], reference, floor, modes };
+    let bodies: Vec<ObstacleBody> = scene.obstacles.iter().map(ObstacleBody::new).collect();
+    for r in floors.iter_mut().chain(modes.iter_mut()) {
+        if !opts.quiet {
+            eprintln!("compare: measuring {} against the reference", r.name);
+        }
+        r.errors = Some(errors(&reference.dir, &r.dir, &ref_stats, &camera, &bodies, opts)?);
+    }
+    let floor_errors: Vec<&Errors> = floors.iter().filter_map(|r| r.errors.as_ref()).collect();
+    let floor_band = floor_band(&floor_errors);
+    if let Some(band) = &floor_band {
+        for m in &mut modes {
+            m.verdicts = m.errors.as_ref().map(|e| verdicts(band, e));
+        }
+    }
+    let report = CompareReport {
+        scene: scene.name.clone(),
+        frames,
+        image: [opts.width, opts.height],
+        reference,
+        floors,
+        floor_band,
+        modes,
+    };
     write_report(&report, &opts.out_dir)?;
     Ok(report)
 }
 
-/// Moves every initial node by `FLOOR_PERTURBATION` in a direction fixed by its index
-/// (deterministic; no handle is exempt, the size is far below any tolerance).
-fn perturb_positions(scene: &mut Scene) {
+/// Moves every initial node by `FLOOR_PERTURBATION` in a direction fixed by its index and
+/// `seed` (SplitMix64 finaliser of both: deterministic, independent across seeds; no handle is
+/// exempt, the size is far below any tolerance).
+fn perturb_positions(scene: &mut Scene, seed: u64) {
     for (i, node) in scene.mesh.nodes.iter_mut().enumerate() {
         let h = |k: u64| {
-            let mut z = (i as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(k);
+            let mut z = (i as u64)
+                .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                .wrapping_add(seed.wrapping_mul(0xD1B5_4A32_D192_ED03))
+                .wrapping_add(k);
             z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
             z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
             ((z ^ (z >> 31)) as Real / u64::MAX as Real) * 2.0 - 1.0
@@ -168,83 +231,176 @@ fn perturb_positions(scene: &mut Scene) {
     }
 }
 
+/// The stats of the run in `dir` when it is finished and matches the request: no error, the
+/// scene's name and remeshing mode, frames 0..=`frames` all listed, and the last frame's
+/// obstacles exported when the scene has obstacles. What the run's scene file held is not
+/// checked: delete the folder to force a re-run.
+fn finished_run(dir: &Path, scene: &Scene, frames: usize) -> Option<RunStats> {
+    let stats = run_dir::read_stats(dir).ok()?;
+    let mode = if scene.cloths.iter().any(|c| c.remesh.as_ref().is_some_and(|r| r.mode == RemeshMode::View)) {
+        "view"
+    } else if scene.cloths.iter().any(|c| c.remesh.as_ref().is_some_and(|r| r.mode.is_adaptive())) {
+        "adaptive"
+    } else {
+        "uniform"
+    };
+    let all_frames = stats.frames.len() == frames + 1 && stats.frames.iter().enumerate().all(|(k, f)| f.frame == k);
+    let matches = stats.error.is_none() && stats.scene == scene.name && stats.mode == mode && all_frames;
+    let files = RunFiles::scan(dir, frames, frames).ok()?;
+    let obstacles = scene.obstacles.is_empty() || files.obstacles(frames).ok()?.is_some();
+    (matches && obstacles && files.frame_path(frames).is_file()).then_some(stats)
+}
+
 fn read_stats(dir: &Path) -> Result<RunStats, RunError> {
     run_dir::read_stats(dir).map_err(RunError::Input)
 }
 
 fn run_report(name: &str, dir: PathBuf, stats: &RunStats) -> RunReport {
     let faces = stats.frames.iter().map(|f| f.faces as Real).sum::<Real>() / stats.frames.len().max(1) as Real;
-    RunReport { name: name.into(), dir, wall_s: stats.total_wall_s, mean_faces: faces, errors: None }
+    RunReport { name: name.into(), dir, wall_s: stats.total_wall_s, mean_faces: faces, errors: None, verdicts: None }
 }
 
+/// A frame's cloth: positions and triangles.
+type ClothMesh = (Vec<Vec3>, Vec<[usize; 3]>);
+
 /// A frame's cloth surface: positions and triangles (file names as the run numbers them).
-fn frame_mesh(files: &RunFiles, frame: usize) -> Result<(Vec<Vec3>, Vec<[usize; 3]>), RunError> {
+fn frame_mesh(files: &RunFiles, frame: usize) -> Result<ClothMesh, RunError> {
     let path = files.frame_path(frame);
     let obj = read_obj(&path).map_err(|msg| RunError::Input(InputError { file: path.clone(), location: None, msg }))?;
     let tris = obj.triangles.iter().map(|t| t.map(|c| c.v)).collect();
     Ok((obj.positions, tris))
 }
 
-/// Mean errors of the run in `dir` against the reference over the compared frames.
+/// The obstacles of `frame` at `time`: those the reference run exported, or else the scene's
+/// re-posed at that time (the same meshes: obstacles are scripted, not simulated).
+fn obstacles(ref_files: &RunFiles, bodies: &[ObstacleBody], frame: usize, time: Real) -> Result<FrameMeshes, RunError> {
+    if let Some(m) = ref_files.obstacles(frame).map_err(RunError::Input)? {
+        return Ok(m);
+    }
+    let mut m = FrameMeshes::default();
+    for b in bodies {
+        m.append(b.positions_at(time), b.triangles().to_vec());
+    }
+    Ok(m)
+}
+
+/// The cloth and the obstacles seen from `view`.
+fn frame_image(
+    cloth: &ClothMesh,
+    obstacles: &FrameMeshes,
+    view: &crate::camera::View,
+    opts: &CompareOptions,
+) -> FrameImage {
+    let mut all = FrameMeshes::default();
+    all.append(cloth.0.clone(), cloth.1.clone());
+    all.append(obstacles.positions.clone(), obstacles.triangles.clone());
+    FrameImage::render(&all.positions, &all.triangles, cloth.1.len(), view, opts.width, opts.height)
+}
+
+/// One frame's errors of `candidate` against `reference` (cloth meshes), with the obstacles.
+fn frame_errors(
+    reference: &ClothMesh,
+    candidate: &ClothMesh,
+    obstacles: &FrameMeshes,
+    view: &crate::camera::View,
+    opts: &CompareOptions,
+) -> (VisibleError, SurfaceDistance, SurfaceDistance, [FrameImage; 2]) {
+    let (ir, ic) = (frame_image(reference, obstacles, view, opts), frame_image(candidate, obstacles, view, opts));
+    let vis = visible_error(&ir, &ic);
+    let all = surface_distance(surface(reference, None), surface(candidate, None));
+    let seen = surface_distance(
+        surface(reference, Some(&ir.visible_fraction[..])),
+        surface(candidate, Some(&ic.visible_fraction[..])),
+    );
+    (vis, all, seen, [ir, ic])
+}
+
+fn surface<'a>(m: &'a ClothMesh, weight: Option<&'a [Real]>) -> Surface<'a> {
+    Surface { positions: &m.0, triangles: &m.1, weight }
+}
+
+/// Errors of the run in `dir` against the reference over the compared frames.
 fn errors(
     reference: &Path,
     dir: &Path,
     ref_stats: &RunStats,
     camera: &Camera,
+    bodies: &[ObstacleBody],
     opts: &CompareOptions,
 ) -> Result<Errors, RunError> {
     let stats = read_stats(dir)?;
     let last = stats.frames.len().min(ref_stats.frames.len()).saturating_sub(1);
     let ref_files = RunFiles::scan(reference, 1, last).map_err(RunError::Input)?;
     let files = RunFiles::scan(dir, 1, last).map_err(RunError::Input)?;
-    let mut sum = Errors::default();
-    let mut n = 0;
-    for f in (opts.every.max(1)..=last).step_by(opts.every.max(1)) {
-        let (xr, tr) = frame_mesh(&ref_files, f)?;
-        let (xc, tc) = frame_mesh(&files, f)?;
-        let view = camera.view_at(ref_stats.frames[f].time);
-        let ir = rasterize(&xr, &tr, &view, opts.width, opts.height);
-        let ic = rasterize(&xc, &tc, &view, opts.width, opts.height);
-        let vis = visible_error(&ir, &ic);
-        let (mr, mc) = (visible_triangles(&ir, tr.len()), visible_triangles(&ic, tc.len()));
-        let all = surface_distance(
-            Surface { positions: &xr, triangles: &tr, mask: None },
-            Surface { positions: &xc, triangles: &tc, mask: None },
-        );
-        let seen = surface_distance(
-            Surface { positions: &xr, triangles: &tr, mask: Some(&mr) },
-            Surface { positions: &xc, triangles: &tc, mask: Some(&mc) },
-        );
-        accumulate(&mut sum, &vis, &all, &seen);
-        n += 1;
+    let mut per_frame = Vec::new();
+    let compared: Vec<usize> = (opts.every.max(1)..=last).step_by(opts.every.max(1)).collect();
+    let strips = strip::strip_frames(&compared);
+    for (k, &f) in compared.iter().enumerate() {
+        if !opts.quiet && (k + 1) % compared.len().div_ceil(10).max(1) == 0 {
+            eprintln!("compare: {}: frame {f} ({}/{} compared)", dir.display(), k + 1, compared.len());
+        }
+        let time = ref_stats.frames[f].time;
+        let (r, c) = (frame_mesh(&ref_files, f)?, frame_mesh(&files, f)?);
+        let obstacles = obstacles(&ref_files, bodies, f, time)?;
+        let view = camera.view_at(time);
+        let (visible, geometric, geometric_visible, [ir, ic]) = frame_errors(&r, &c, &obstacles, &view, opts);
+        if strips.contains(&f) {
+            write_strip(&files.frame_path(f), [&r, &c], &obstacles, &view, [&ir, &ic], opts)?;
+        }
+        per_frame.push(FrameErrors { frame: f, time, visible, geometric, geometric_visible });
     }
-    Ok(mean(sum, n))
+    Ok(mean(per_frame))
 }
 
-fn accumulate(sum: &mut Errors, vis: &VisibleError, all: &SurfaceDistance, seen: &SurfaceDistance) {
-    sum.visible.normal_deg += vis.normal_deg;
-    sum.visible.silhouette += vis.silhouette;
-    sum.visible.depth += vis.depth;
-    sum.visible.pixels += vis.pixels;
-    for (s, d) in [(&mut sum.geometric, all), (&mut sum.geometric_visible, seen)] {
-        s.mean += d.mean;
-        s.p95 += d.p95;
-        s.samples += d.samples;
-    }
+/// Writes `strip_NNNN.png` next to the run's frame `frame_obj`: reference | run | heat map.
+fn write_strip(
+    frame_obj: &Path,
+    cloths: [&ClothMesh; 2],
+    obstacles: &FrameMeshes,
+    view: &crate::camera::View,
+    images: [&FrameImage; 2],
+    opts: &CompareOptions,
+) -> Result<(), RunError> {
+    let (w, h) = (opts.width, opts.height);
+    let render = |cloth: &ClothMesh| {
+        let mut all = FrameMeshes::default();
+        all.append(cloth.0.clone(), cloth.1.clone());
+        all.cloth_triangles = cloth.1.len();
+        all.append(obstacles.positions.clone(), obstacles.triangles.clone());
+        crate::render::render_frame(&all, view, w, h, crate::render::Colouring::Shade)
+    };
+    let (r, c, heat) = (render(cloths[0]), render(cloths[1]), strip::heat_map(images[0], images[1]));
+    let png = crate::render::png::encode(3 * w, h, &strip::side_by_side([&r, &c, &heat], w, h));
+    let name = frame_obj.file_name().map_or_else(String::new, |n| n.to_string_lossy().replace("frame_", "strip_"));
+    let path = frame_obj.with_file_name(name.replace(".obj", ".png"));
+    crate::io::write_atomic(&path, &png).map_err(|source| RunError::Io { path, source })
 }
 
-fn mean(mut sum: Errors, n: usize) -> Errors {
+/// Means over the frames (counts too, rounded down), with the frames kept.
+fn mean(per_frame: Vec<FrameErrors>) -> Errors {
+    let n = per_frame.len();
     let k = n.max(1) as Real;
-    sum.visible.normal_deg /= k;
-    sum.visible.silhouette /= k;
-    sum.visible.depth /= k;
-    sum.visible.pixels /= n.max(1);
-    for s in [&mut sum.geometric, &mut sum.geometric_visible] {
-        s.mean /= k;
-        s.p95 /= k;
-        s.samples /= n.max(1);
+    let mut sum = Errors::default();
+    for e in &per_frame {
+        let (s, v) = (&mut sum.visible, &e.visible);
+        s.normal_deg += v.normal_deg / k;
+        s.normal_flat_deg += v.normal_flat_deg / k;
+        s.silhouette += v.silhouette / k;
+        s.depth += v.depth / k;
+        s.pixels += v.pixels;
+        for (s, d) in [(&mut sum.geometric, &e.geometric), (&mut sum.geometric_visible, &e.geometric_visible)] {
+            s.mean += d.mean / k;
+            s.rms += d.rms / k;
+            s.p95 += d.p95 / k;
+            s.max += d.max / k;
+            s.samples += d.samples;
+        }
     }
+    sum.visible.pixels /= n.max(1);
+    sum.geometric.samples /= n.max(1);
+    sum.geometric_visible.samples /= n.max(1);
     sum.frames_compared = n;
+    sum.per_frame = per_frame;
     sum
 }
 
@@ -257,5 +413,9 @@ fn write_report(report: &CompareReport, dir: &Path) -> Result<(), RunError> {
         .map_err(|e| RunError::Io { path: dir.join("compare.json"), source: std::io::Error::other(e.to_string()) })?;
     write("compare.json", json.as_bytes())?;
     write("compare.md", markdown(report).as_bytes())?;
-    write("compare.svg", svg_plot(report).as_bytes())
+    write("compare.svg", svg_plot(report).as_bytes())?;
+    for (k, m) in MEASURES.iter().enumerate().filter(|(_, m)| ["normal_deg", "distance_mean"].contains(&m.name)) {
+        write(&format!("compare_frames_{}.svg", m.name), svg_curves(report, k).as_bytes())?;
+    }
+    Ok(())
 }

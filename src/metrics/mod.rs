@@ -3,10 +3,11 @@
 //!
 //! - `raster`: a deterministic CPU rasteriser giving depth, normal and triangle buffers from the
 //!   shot camera;
-//! - `visible`: what the audience sees: mean normal-angle difference, silhouette mismatch
-//!   (XOR / union of coverage) and depth error relative to the scene depth;
-//! - `geometric`: two-sided area-weighted mean and 95th-percentile distance between the
-//!   surfaces, over all cloth or only its visible triangles.
+//! - `visible`: what the audience sees, obstacles rasterised with the cloth: mean normal-angle
+//!   difference (shading and flat normals), silhouette mismatch (XOR / union of cloth pixels)
+//!   and depth error relative to the scene depth;
+//! - `geometric`: two-sided distance between the densely sampled surfaces (mean, RMS, 95th
+//!   percentile, max), over all cloth or weighted by each triangle's visible pixel fraction.
 //!
 //! Cloth is chaotic, so these errors are read against the chaos floor (the reference against a
 //! perturbed re-run of itself), which `compare` computes with the same functions.
@@ -15,6 +16,6 @@ pub mod geometric;
 pub mod raster;
 pub mod visible;
 
-pub use geometric::{surface_distance, visible_triangles, Surface, SurfaceDistance};
-pub use raster::{rasterize, Image};
-pub use visible::{visible_error, VisibleError};
+pub use geometric::{surface_distance, Surface, SurfaceDistance};
+pub use raster::{coverage, rasterize, shading_normals, vertex_normals, Image};
+pub use visible::{visible_error, FrameImage, VisibleError};

@@ -9,7 +9,9 @@
 //! (perspective-correct).
 //!
 //! Triangles are clipped against the near plane (z ≥ near) in camera space before projection;
-//! samples beyond the far plane are discarded. Work is split into bands of rows processed in
+//! samples beyond the far plane are discarded. A pixel centre exactly on an edge belongs to one
+//! of the triangles sharing it (a fixed fill rule, see `for_each_sample`), so a mesh's
+//! triangles cover each centre once. Work is split into bands of rows processed in
 //! parallel; each pixel belongs to one band, which draws its triangles in index order, and depth
 //! ties go to the lower triangle index, so the image is the same whatever the thread count.
 
@@ -189,27 +191,149 @@ fn bin_by_band(screen: &[ScreenTri], height: usize) -> Vec<Vec<u32>> {
 /// Draws `tri` into one band (rows from `row0`) of the depth and face buffers.
 fn draw(tri: &ScreenTri, row0: usize, width: usize, far: Real, depth: &mut [Real], face: &mut [u32]) {
     let rows = tri.rows.0.max(row0)..=tri.rows.1.min(row0 + depth.len() / width - 1);
+    for_each_sample(tri, rows, far, |i, j, z| {
+        let k = (j - row0) * width + i;
+        if z < depth[k] || (z == depth[k] && tri.face < face[k]) {
+            depth[k] = z;
+            face[k] = tri.face;
+        }
+    });
+}
+
+/// Calls `f(column, row, depth)` for every pixel centre of `rows` inside `tri` and not beyond
+/// `far`.
+fn for_each_sample(
+    tri: &ScreenTri,
+    rows: std::ops::RangeInclusive<usize>,
+    far: Real,
+    mut f: impl FnMut(usize, usize, Real),
+) {
     let [a, b, c] = tri.uv;
+    // A centre exactly on edge k counts when the triangle lies on the positive side of the edge
+    // taken in its fixed endpoint order (`edge`): the two triangles sharing an edge lie on
+    // opposite sides, so exactly one of them takes the centre. This is "the triangle holding
+    // p + δ" for the fixed infinitesimal δ = (−ε², ε), so a centre on a shared vertex goes to
+    // one triangle of its fan too (a top-left-style fill rule).
+    let ties = [(b, c, a), (c, a, b), (a, b, c)].map(|(p, q, r)| {
+        let (lo, hi) = if (p[0], p[1]) <= (q[0], q[1]) { (p, q) } else { (q, p) };
+        orient(lo, hi, r) > 0.0
+    });
     for j in rows {
         for i in tri.cols.0..=tri.cols.1 {
             let p = [i as Real + 0.5, j as Real + 0.5];
             // Edge functions: e_k is twice the signed area opposite vertex k.
             let e = [edge(b, c, p), edge(c, a, p), edge(a, b, p)];
-            let inside = e.iter().all(|&x| x >= 0.0) || e.iter().all(|&x| x <= 0.0);
             let sum = e[0] + e[1] + e[2];
+            let inside = (0..3).all(|k| e[k] * sum > 0.0 || (e[k] == 0.0 && ties[k]));
             if !inside || sum == 0.0 {
                 continue;
             }
             // Screen barycentrics e_k / Σe; 1/z is affine in screen space.
             let inv_z = (e[0] * tri.inv_z[0] + e[1] * tri.inv_z[1] + e[2] * tri.inv_z[2]) / sum;
             let z = 1.0 / inv_z;
-            let k = (j - row0) * width + i;
-            if z <= far && (z < depth[k] || (z == depth[k] && tri.face < face[k])) {
-                depth[k] = z;
-                face[k] = tri.face;
+            if z <= far {
+                f(i, j, z);
             }
         }
     }
+}
+
+/// Pixel centres each triangle covers whether or not something is in front of it (no depth
+/// test; same clipping and sampling as `rasterize`): the denominator of a triangle's visible
+/// pixel fraction.
+///
+/// # Panics
+/// As `rasterize`.
+pub fn coverage(positions: &[Vec3], triangles: &[[usize; 3]], view: &View, width: usize, height: usize) -> Vec<u32> {
+    assert!(triangles.len() < u32::MAX as usize, "coverage: too many triangles for u32 ids");
+    triangles
+        .par_iter()
+        .enumerate()
+        .map(|(f, t)| {
+            if width * height == 0 || facing_normal(positions, t, &view.eye).is_none() {
+                return 0;
+            }
+            let mut n = 0;
+            for s in project(positions, t, f as u32, view, width, height).iter().flatten() {
+                for_each_sample(s, s.rows.0..=s.rows.1, view.far, |_, _, _| n += 1);
+            }
+            n
+        })
+        .collect()
+}
+
+/// Area-weighted vertex normals: per vertex, Σ (b − a) × (c − a) over its triangles,
+/// normalised (zero for a vertex without area) — the `vn` a frame OBJ carries
+/// (`Mesh::node_normals`), which a renderer interpolates.
+pub fn vertex_normals(positions: &[Vec3], triangles: &[[usize; 3]]) -> Vec<Vec3> {
+    let mut n = vec![Vec3::zeros(); positions.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|i| positions[i]);
+        let area_normal = (b - a).cross(&(c - a));
+        for &i in t {
+            n[i] += area_normal;
+        }
+    }
+    n.iter().map(|v| v.try_normalize(0.0).unwrap_or_else(Vec3::zeros)).collect()
+}
+
+/// Per pixel, the shading normal a renderer uses: the vertex normals of the front triangle
+/// interpolated (Phong) at the point the pixel centre sees, normalised, and flipped with the
+/// image's flat normal so it faces the eye's side; zero where empty, the flat normal where the
+/// interpolation vanishes.
+///
+/// The seen point is the pixel ray at the pixel's depth z, in camera coordinates
+/// (z (2(i + ½)/W − 1) tan_h, z (1 − 2(j + ½)/H) tan_v, z) (the module's projection inverted);
+/// its barycentrics in the 3D triangle make the interpolation perspective-correct.
+pub fn shading_normals(
+    image: &Image,
+    positions: &[Vec3],
+    triangles: &[[usize; 3]],
+    normals: &[Vec3],
+    view: &View,
+) -> Vec<Vec3> {
+    let (w, h) = (image.width as Real, image.height as Real);
+    let tan_v = view.tan_half_fov;
+    let tan_h = view.aspect * tan_v;
+    (0..image.face.len())
+        .into_par_iter()
+        .map(|p| {
+            let f = image.face[p];
+            if f == u32::MAX {
+                return Vec3::zeros();
+            }
+            let t = triangles[f as usize];
+            let (i, j, z) = ((p % image.width) as Real, (p / image.width) as Real, image.depth[p]);
+            let x = z * (2.0 * (i + 0.5) / w - 1.0) * tan_h;
+            let y = z * (1.0 - 2.0 * (j + 0.5) / h) * tan_v;
+            let seen = view.eye + view.right * x + view.up * y + view.forward * z;
+            let [a, b, c] = t.map(|k| positions[k]);
+            let bary = barycentric(&seen, &a, &b, &c);
+            let n = t.iter().zip(bary).map(|(&k, w)| normals[k] * w).sum::<Vec3>();
+            let flat = image.normal[p];
+            match n.try_normalize(0.0) {
+                // The geometric normal (b − a) × (c − a) against the flipped flat normal: the same
+                // flip for the shading normal.
+                Some(n) if (b - a).cross(&(c - a)).dot(&flat) < 0.0 => -n,
+                Some(n) => n,
+                None => flat,
+            }
+        })
+        .collect()
+}
+
+/// Barycentric weights of `p` (projected onto the plane) in triangle (a, b, c) (Ericson 2005,
+/// §3.4, by the normal equations); the centroid's for a degenerate triangle.
+fn barycentric(p: &Vec3, a: &Vec3, b: &Vec3, c: &Vec3) -> [Real; 3] {
+    let (v0, v1, v2) = (b - a, c - a, p - a);
+    let (d00, d01, d11, d20, d21) = (v0.dot(&v0), v0.dot(&v1), v1.dot(&v1), v2.dot(&v0), v2.dot(&v1));
+    let denom = d00 * d11 - d01 * d01;
+    if denom <= 0.0 {
+        return [1.0 / 3.0; 3];
+    }
+    let v = (d11 * d20 - d01 * d21) / denom;
+    let w = (d00 * d21 - d01 * d20) / denom;
+    [1.0 - v - w, v, w]
 }
 
 /// Twice the signed area of (a, b, p).

@@ -24,7 +24,7 @@ pub struct FrameMeshes {
 
 impl FrameMeshes {
     /// Appends a mesh, renumbering its triangles after the positions already held.
-    fn append(&mut self, positions: Vec<Vec3>, triangles: Vec<[usize; 3]>) {
+    pub fn append(&mut self, positions: Vec<Vec3>, triangles: Vec<[usize; 3]>) {
         let base = self.positions.len();
         self.positions.extend(positions);
         self.triangles.extend(triangles.into_iter().map(|t| t.map(|i| i + base)));
@@ -121,6 +121,24 @@ impl RunFiles {
             }
         }
         Ok(meshes)
+    }
+}
+
+impl RunFiles {
+    /// The obstacles the run exported for `frame` (none exported: None).
+    pub fn obstacles(&self, frame: usize) -> Result<Option<FrameMeshes>, InputError> {
+        if self.obstacles.is_empty() {
+            return Ok(None);
+        }
+        let mut meshes = FrameMeshes::default();
+        for name in &self.obstacles {
+            let path = self.obstacle_path(name, frame);
+            if path.is_file() {
+                let (x, t) = read_mesh(&path)?;
+                meshes.append(x, t);
+            }
+        }
+        Ok(Some(meshes))
     }
 }
 
