@@ -193,6 +193,10 @@ pub struct CompareArgs {
     /// Only the table at the end.
     #[arg(long)]
     pub quiet: bool,
+    /// Progress of the runs: `bar`, `lines` (one stderr line per frame, for logs) or `none`
+    /// (default: a bar on a terminal, lines otherwise; `none` with --quiet).
+    #[arg(long, value_parser = ProgressMode::NAMES)]
+    pub progress: Option<String>,
 }
 
 #[derive(clap::Args)]

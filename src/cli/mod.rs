@@ -222,6 +222,7 @@ pub fn compare_modes(args: CompareArgs) -> Result<(), CliError> {
         height,
         every: args.every as usize,
         quiet: args.quiet,
+        progress: ProgressMode::choose(args.progress.as_deref(), args.quiet),
     };
     let report = compare(shot.scene, &opts)?;
     print!("{}", markdown(&report));

@@ -33,7 +33,8 @@ use crate::metrics::{surface_distance, visible_error, FrameImage, Surface};
 use crate::metrics::{SurfaceDistance, VisibleError};
 use crate::render::run_dir::{self, FrameMeshes, RunFiles};
 use crate::scene::{RemeshMode, Scene};
-use crate::sim::{run, RunError, RunOptions};
+use crate::sim::progress::{Progress, ProgressMode};
+use crate::sim::{run_shot, RunError, RunOptions};
 
 pub use floor::{floor_band, verdicts, FloorBand, MeasureBand, Verdict, MEASURES};
 pub use report::{markdown, svg_curves, svg_plot};
@@ -66,6 +67,8 @@ pub struct CompareOptions {
     /// Compare every this many frames (frame 0, the shared initial state, is skipped).
     pub every: usize,
     pub quiet: bool,
+    /// How the runs report their frames.
+    pub progress: ProgressMode,
 }
 
 /// The error of one run against the reference in one frame.
@@ -161,7 +164,8 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
             // run's progress bar (on a terminal) unless quiet.
             let run_opts =
                 RunOptions { out_dir: dir.clone(), frames: opts.frames, quiet: opts.quiet, export_obstacles: true };
-            let stats = run(s, &run_opts)?;
+            let progress = Progress { label: Some(format!("{name} run")), ..Progress::new(opts.progress) };
+            let stats = run_shot(s, &run_opts, None, &progress)?;
             Ok(run_report(name, dir, &stats))
         };
     let simulate = |name: &str, mode: RemeshMode, perturb: Option<u64>| -> Result<RunReport, RunError> {
