@@ -3,7 +3,7 @@
 //! uninterrupted run's. The scene remeshes adaptively, collides with a moving obstacle and has
 //! handles (renumbered by remeshing), so every kind of state a checkpoint holds is exercised.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -35,6 +35,19 @@ fn viewcloth(args: &[&str]) -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_viewcloth"));
     c.args(args).stdout(Stdio::null()).stderr(Stdio::piped());
     c
+}
+
+/// The test scene written into `dir` and its uninterrupted run in `dir/reference`: the scene
+/// file, the directory for the run under test (`dir/run`) and the reference frames.
+fn reference_run(dir: &Path) -> (PathBuf, PathBuf, Vec<(String, Vec<u8>)>) {
+    let scene = dir.join("scene.json");
+    std::fs::write(&scene, scene_json().to_string()).unwrap();
+    let reference_dir = dir.join("reference");
+    let out = viewcloth(&["simulate", scene.to_str().unwrap(), "--out", reference_dir.to_str().unwrap(), "--quiet"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "reference run: {}", String::from_utf8_lossy(&out.stderr));
+    (scene, dir.join("run"), frame_files(&reference_dir))
 }
 
 fn frame_files(dir: &Path) -> Vec<(String, Vec<u8>)> {
@@ -105,14 +118,8 @@ fn check_complete(dir: &Path, reference: &[(String, Vec<u8>)], what: &str) {
 #[test]
 fn killed_run_resumes_to_identical_frames() {
     let dir = temp_dir("kill-resume");
-    let scene = dir.join("scene.json");
-    std::fs::write(&scene, scene_json().to_string()).unwrap();
-    let (reference_dir, run_dir) = (dir.join("reference"), dir.join("run"));
-    let (s, r, o) = (scene.to_str().unwrap(), reference_dir.to_str().unwrap(), run_dir.to_str().unwrap());
-
-    let out = viewcloth(&["simulate", s, "--out", r, "--quiet"]).output().unwrap();
-    assert!(out.status.success(), "reference run: {}", String::from_utf8_lossy(&out.stderr));
-    let reference = frame_files(&reference_dir);
+    let (scene, run_dir, reference) = reference_run(&dir);
+    let (s, o) = (scene.to_str().unwrap(), run_dir.to_str().unwrap());
     assert_eq!(reference.len(), FRAMES + 1);
 
     // Killed right after its second checkpoint (frame 4), then twice more while resuming, the
@@ -256,13 +263,8 @@ fn resume_rejects_missing_and_damaged_checkpoints_and_changed_scenes() {
 #[test]
 fn sigterm_checkpoints_exits_75_and_resume_finishes_identically() {
     let dir = temp_dir("sigterm");
-    let scene = dir.join("scene.json");
-    std::fs::write(&scene, scene_json().to_string()).unwrap();
-    let (reference_dir, run_dir) = (dir.join("reference"), dir.join("run"));
-    let (s, r, o) = (scene.to_str().unwrap(), reference_dir.to_str().unwrap(), run_dir.to_str().unwrap());
-    let out = viewcloth(&["simulate", s, "--out", r, "--quiet"]).output().unwrap();
-    assert!(out.status.success(), "reference run: {}", String::from_utf8_lossy(&out.stderr));
-    let reference = frame_files(&reference_dir);
+    let (scene, run_dir, reference) = reference_run(&dir);
+    let (s, o) = (scene.to_str().unwrap(), run_dir.to_str().unwrap());
 
     for (what, extra) in [("no periodic checkpoints", &[][..]), ("every 5", &["--checkpoint-every", "5"][..])] {
         let _ = std::fs::remove_dir_all(&run_dir);

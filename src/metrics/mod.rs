@@ -19,3 +19,29 @@ pub mod visible;
 pub use geometric::{surface_distance, Surface, SurfaceDistance};
 pub use raster::{coverage, rasterize, shading_normals, vertex_normals, Image};
 pub use visible::{visible_error, FrameImage, VisibleError};
+
+/// Test meshes: an `nx` × `nz` grid of 2 nx nz triangles whose node (i, j) is
+/// `point(i / nx, j / nz)`.
+#[cfg(test)]
+pub(crate) fn test_grid(
+    nx: usize,
+    nz: usize,
+    point: impl Fn(crate::math::Real, crate::math::Real) -> crate::math::Vec3,
+) -> (Vec<crate::math::Vec3>, Vec<[usize; 3]>) {
+    use crate::math::Real;
+    let mut x = Vec::new();
+    for j in 0..=nz {
+        for i in 0..=nx {
+            x.push(point(i as Real / nx as Real, j as Real / nz as Real));
+        }
+    }
+    let id = |i: usize, j: usize| j * (nx + 1) + i;
+    let mut tris = Vec::new();
+    for j in 0..nz {
+        for i in 0..nx {
+            tris.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            tris.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    (x, tris)
+}

@@ -387,23 +387,10 @@ pub(crate) mod tests {
 
     /// An `n` × `n` grid over [−1, 1]² in x–z at depth ≈ 2, rippled in y: 2n² triangles.
     pub(crate) fn wavy_grid(n: usize) -> (Vec<Vec3>, Vec<[usize; 3]>) {
-        let mut x = Vec::new();
-        for j in 0..=n {
-            for i in 0..=n {
-                let (s, t) = (i as Real / n as Real, j as Real / n as Real);
-                let y = 2.0 + 0.1 * (9.0 * s).sin() * (7.0 * t).cos() + 0.3 * s * t;
-                x.push(v(2.0 * s - 1.0, y, 2.0 * t - 1.0));
-            }
-        }
-        let id = |i: usize, j: usize| j * (n + 1) + i;
-        let mut tris = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                tris.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                tris.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        (x, tris)
+        super::super::test_grid(n, n, |s, t| {
+            let y = 2.0 + 0.1 * (9.0 * s).sin() * (7.0 * t).cos() + 0.3 * s * t;
+            v(2.0 * s - 1.0, y, 2.0 * t - 1.0)
+        })
     }
 
     #[test]

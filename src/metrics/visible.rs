@@ -147,22 +147,10 @@ mod tests {
         s: Real,
         depth: impl Fn(Real, Real) -> Real,
     ) -> (Vec<Vec3>, Vec<[usize; 3]>) {
-        let mut x = Vec::new();
-        for j in 0..=nz {
-            for i in 0..=nx {
-                let (a, b) = (s * (i as Real / nx as Real - 0.5), s * (j as Real / nz as Real - 0.5));
-                x.push(v(a, depth(a, b), b));
-            }
-        }
-        let id = |i: usize, j: usize| j * (nx + 1) + i;
-        let mut tris = Vec::new();
-        for j in 0..nz {
-            for i in 0..nx {
-                tris.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
-                tris.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
-            }
-        }
-        (x, tris)
+        super::super::test_grid(nx, nz, |u, w| {
+            let (a, b) = (s * (u - 0.5), s * (w - 0.5));
+            v(a, depth(a, b), b)
+        })
     }
 
     /// `cloth` followed by `obstacle`, renumbered: one mesh to rasterise.
