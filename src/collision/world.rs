@@ -34,6 +34,14 @@ pub struct CollisionCounters {
     pub cap_hits: usize,
     /// Zones whose projection had no solution.
     pub failed_zones: usize,
+    /// Friction contacts sticking and sliding at the accepted solves.
+    pub sticking: usize,
+    pub sliding: usize,
+    /// Solves and factorisations beyond the first that friction's mode changes took.
+    pub friction_resolves: usize,
+    pub friction_refactors: usize,
+    /// Steps whose friction modes had not settled after `friction::MAX_SOLVES` solves.
+    pub friction_unconverged: usize,
 }
 
 pub struct CollisionWorld {

@@ -154,6 +154,7 @@ impl Simulation {
             })
             .collect();
         state.extra_pairs.clear();
+        state.stuck.clear();
         self.ws.remeshed(state)?;
         self.push_out(None)?;
         Ok(())
