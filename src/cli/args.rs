@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 
+use crate::io::OutputFormat;
 use crate::scene::RemeshMode;
 use crate::sim::progress::ProgressMode;
 
@@ -74,9 +75,17 @@ pub struct SimulateArgs {
     /// Replace the run of another scene in the output directory (refused without it).
     #[arg(long)]
     pub force: bool,
-    /// Also write each obstacle's world-space mesh per frame beside the cloth frames.
+    /// Also write each obstacle's world-space mesh per frame beside the cloth frames (and as
+    /// prims of the USD layer).
     #[arg(long)]
     pub export_obstacles: bool,
+    /// What is written per frame: `obj` (frame_NNNN.obj), `usd` (one cloth.usda layer with
+    /// every frame as time samples, velocities included) or `both`.
+    #[arg(long, value_parser = OutputFormat::NAMES)]
+    pub format: Option<String>,
+    /// OBJ frames carry each node's velocity (m/s) on an `nv` line after its `v` (ARCSim's).
+    #[arg(long)]
+    pub obj_velocities: bool,
     /// Override the remeshing mode of every cloth with a `remesh` block: `adaptive`, `uniform`
     /// (refined once to the minimum edge length, never remeshed) or `view` (adaptive, scaled by
     /// the camera's view factors; needs a camera).
@@ -98,9 +107,13 @@ pub struct SimulateArgs {
 pub struct ResumeArgs {
     /// Output directory of a run started with --checkpoint-every.
     pub dir: PathBuf,
-    /// Last frame of the continued run (default: the run's own).
+    /// Frames of the continued run after its first (default: the run's own).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub frames: Option<u64>,
+    /// The run's output format (`obj`, `usd` or `both`): checked, a run continues in the
+    /// format it started with.
+    #[arg(long, value_parser = OutputFormat::NAMES)]
+    pub format: Option<String>,
     /// Worker threads (default: all cores). Results are identical for any count.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
@@ -136,6 +149,10 @@ pub struct BatchArgs {
     /// Replace runs of other scenes in the shots' output directories (refused without it).
     #[arg(long)]
     pub force: bool,
+    /// Output format of the shots that do not give their own `format`: `obj` (default), `usd`
+    /// or `both`.
+    #[arg(long, value_parser = OutputFormat::NAMES)]
+    pub format: Option<String>,
     /// Run only shot N of the list (counted from 0), e.g. as one task of a job array.
     #[arg(long, value_name = "N", conflicts_with = "shot_from_env")]
     pub shot: Option<u64>,

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use crate::camera::Camera;
 use crate::compare::{compare, markdown, CompareOptions};
 use crate::error::InputError;
+use crate::io::OutputFormat;
 use crate::render::{render_run, Colouring, RenderOptions};
 use crate::scene::{self, RemeshMode};
 use crate::shot::{self, ShotError, ShotRequest};
@@ -125,6 +126,8 @@ pub fn simulate(args: SimulateArgs) -> Result<(), CliError> {
         progress,
         force,
         export_obstacles,
+        format,
+        obj_velocities,
         mode,
         camera,
         checkpoint_every,
@@ -139,7 +142,16 @@ pub fn simulate(args: SimulateArgs) -> Result<(), CliError> {
         print_warnings(path, &shot.warnings);
     }
     let out_dir = out.unwrap_or_else(|| Path::new("out").join(&shot.stem));
-    let opts = RunOptions { out_dir: out_dir.clone(), frames: frames.map(|f| f as usize), quiet, export_obstacles };
+    // clap admits only OutputFormat::NAMES.
+    let format = format.as_deref().and_then(OutputFormat::parse).unwrap_or_default();
+    let opts = RunOptions {
+        out_dir: out_dir.clone(),
+        frames: frames.map(|f| f as usize),
+        quiet,
+        export_obstacles,
+        format,
+        obj_velocities,
+    };
     // Without --checkpoint-every, a checkpoint is written only when a signal stops the run.
     let ck = CheckpointOptions {
         every: checkpoint_every.unwrap_or(0) as usize,
@@ -162,7 +174,8 @@ pub fn resume_run(args: ResumeArgs) -> Result<(), CliError> {
     set_threads(args.threads)?;
     install_interrupt()?;
     let progress = Progress::new(ProgressMode::choose(args.progress.as_deref(), args.quiet));
-    let opts = ResumeOptions { frames: args.frames.map(|f| f as usize), progress };
+    let format = args.format.as_deref().and_then(OutputFormat::parse);
+    let opts = ResumeOptions { frames: args.frames.map(|f| f as usize), format, progress };
     let stats = resume(&args.dir, &opts)?;
     if !args.quiet {
         let resumed = stats.resumed_at.last().copied().unwrap_or(0);
@@ -284,7 +297,8 @@ fn chosen_shot(args: &BatchArgs, n: usize) -> Result<Option<usize>, CliError> {
 
 pub fn batch(args: BatchArgs) -> Result<(), CliError> {
     let file = args.shots.as_path();
-    let shots = crate::batch::load(file, args.force)?;
+    let format = args.format.as_deref().and_then(OutputFormat::parse).unwrap_or_default();
+    let shots = crate::batch::load(file, args.force, format)?;
     let n = shots.len();
     let stem = file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "shots".into());
     if args.emit.is_some() {

@@ -162,8 +162,13 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
             }
             // Obstacles exported: the frames are rasterised with them (and `render` shows them). The
             // run's progress bar (on a terminal) unless quiet.
-            let run_opts =
-                RunOptions { out_dir: dir.clone(), frames: opts.frames, quiet: opts.quiet, export_obstacles: true };
+            let run_opts = RunOptions {
+                out_dir: dir.clone(),
+                frames: opts.frames,
+                quiet: opts.quiet,
+                export_obstacles: true,
+                ..Default::default()
+            };
             let progress = Progress { label: Some(format!("{name} run")), ..Progress::new(opts.progress) };
             let stats = run_shot(s, &run_opts, None, &progress)?;
             Ok(run_report(name, dir, &stats))
