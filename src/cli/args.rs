@@ -36,6 +36,9 @@ pub enum Command {
     /// Render PNG previews of a run's frames (RUN_DIR/view_NNNN.png) from a camera, shaded or
     /// coloured by the cloth's view factor.
     Render(RenderArgs),
+    /// Resample an adaptive run onto one fixed-topology mesh for the whole shot (OBJ frames, a
+    /// PC2 point cache, a USD layer and the resampling error per frame).
+    Resample(ResampleArgs),
     /// Run many shots from a shots file (JSON list of scenes with per-shot options), several at a
     /// time; a failed shot does not stop the others. A rerun skips finished shots and resumes
     /// interrupted ones.
@@ -242,4 +245,23 @@ pub struct RenderArgs {
     /// on a terminal, lines otherwise).
     #[arg(long, value_parser = ProgressMode::NAMES)]
     pub progress: Option<String>,
+}
+
+#[derive(clap::Args)]
+#[command(group(clap::ArgGroup::new("target").required(true).args(["mesh", "auto"])))]
+pub struct ResampleArgs {
+    /// Output directory of a run with OBJ frames (`--format obj` or `both`).
+    #[arg(value_name = "RUN_DIR")]
+    pub dir: PathBuf,
+    /// The fixed mesh: an OBJ whose texture coordinates (in the run's, i.e. the input's, units)
+    /// are the material locations its vertices track (e.g. the garment the scene was made from).
+    #[arg(long, value_name = "OBJ")]
+    pub mesh: Option<PathBuf>,
+    /// Make the fixed mesh from the run: its first frame refined to the finest sizing the run
+    /// ever had at each place.
+    #[arg(long)]
+    pub auto: bool,
+    /// Where to write (frame_NNNN.obj, cloth.pc2, cloth.usda, resample.json).
+    #[arg(long)]
+    pub out: PathBuf,
 }

@@ -17,7 +17,7 @@ use crate::shot::{self, ShotError, ShotRequest};
 use crate::sim::progress::{Progress, ProgressMode};
 use crate::sim::SimError;
 use crate::sim::{claim_output, interrupt, resume, run_shot, CheckpointOptions, ResumeOptions, RunError, RunOptions};
-use args::{BatchArgs, CompareArgs, RenderArgs, ResumeArgs, SimulateArgs};
+use args::{BatchArgs, CompareArgs, RenderArgs, ResampleArgs, ResumeArgs, SimulateArgs};
 
 /// Exit code for bad input (scene, mesh, command line).
 pub const EXIT_INPUT: u8 = 2;
@@ -269,6 +269,28 @@ pub fn render(args: RenderArgs) -> Result<(), CliError> {
         false => CliError::Run(e.to_string()),
     })?;
     println!("{n} images → {}", args.dir.join("view_*.png").display());
+    Ok(())
+}
+
+pub fn resample(args: ResampleArgs) -> Result<(), CliError> {
+    use crate::resample::{resample, ResampleError, Target};
+    let target = match args.mesh {
+        Some(m) => Target::Mesh(m),
+        None => Target::Auto,
+    };
+    let r = resample(&args.dir, &target, &args.out).map_err(|e| match e {
+        ResampleError::Input(e) => CliError::Input(e.to_string()),
+        other => CliError::Run(other.to_string()),
+    })?;
+    let worst = r.frames.iter().map(|f| f.max).fold(0.0, f64::max);
+    println!(
+        "{} frames resampled onto {} faces (the run: mean {:.0}, max {}); error max {worst:.3e} m → {}",
+        r.frames.len(),
+        r.faces,
+        r.run_mean_faces,
+        r.run_max_faces,
+        args.out.display()
+    );
     Ok(())
 }
 

@@ -36,6 +36,9 @@ use super::obj::{uv_unit, ClothOut};
 use crate::math::Vec3;
 use crate::mesh::Mesh;
 
+/// The folder of a layer's per-frame samples files, beside the layer.
+pub const SAMPLES_DIR: &str = "usd_samples";
+
 /// The stage's time range and rate.
 #[derive(Clone, Debug)]
 pub struct StageInfo {
@@ -177,6 +180,35 @@ fn cloth_samples(s: &mut String, prim: &str, mesh: &Mesh, c: u16, cloths: &[Clot
     line(s, prim, 't', "int[] primvars:st:indices", |s| {
         ints(s, faces.iter().flat_map(|&f| mesh.faces[f].v).map(|v| vert_index[v.idx()]))
     });
+}
+
+/// The samples file of one frame of a fixed-topology mesh (a resampled run): the faces and the
+/// face-varying st once, points, extent and (when given) velocities time-sampled.
+pub fn fixed_samples(
+    prim: &str,
+    points: &[Vec3],
+    velocities: Option<&[Vec3]>,
+    faces: &[[usize; 3]],
+    st: &[crate::math::Vec2],
+    st_indices: &[[usize; 3]],
+) -> String {
+    let mut s = String::new();
+    mesh_header(&mut s, prim);
+    line(&mut s, prim, 'u', "int[] faceVertexCounts", |s| ints(s, faces.iter().map(|_| 3)));
+    line(&mut s, prim, 'u', "int[] faceVertexIndices", |s| ints(s, faces.iter().flatten().copied()));
+    line(&mut s, prim, 't', "point3f[] points", |s| vec3s(s, points.iter()));
+    line(&mut s, prim, 't', "float3[] extent", |s| extent(s, points.iter()));
+    if let Some(v) = velocities {
+        line(&mut s, prim, 't', "vector3f[] velocities", |s| vec3s(s, v.iter()));
+    }
+    line(&mut s, prim, 'm', "texCoord2f[] primvars:st", |s| s.push_str("interpolation = \"faceVarying\""));
+    line(&mut s, prim, 'u', "texCoord2f[] primvars:st", |s| {
+        array(s, st.iter(), |s, u| {
+            let _ = write!(s, "({}, {})", F(u.x), F(u.y));
+        })
+    });
+    line(&mut s, prim, 'u', "int[] primvars:st:indices", |s| ints(s, st_indices.iter().flatten().copied()));
+    s
 }
 
 fn obstacle_samples(s: &mut String, prim: &str, o: &ObstacleFrame) {

@@ -22,7 +22,7 @@ use super::{file_safe, io_err, RunError, Simulation};
 /// The USD layer of a run, in its output directory.
 pub const USD_FILE: &str = "cloth.usda";
 /// The folder of the per-frame USD samples the layer is assembled from.
-pub const USD_SAMPLES: &str = "usd_samples";
+pub const USD_SAMPLES: &str = usd::SAMPLES_DIR;
 
 /// Where and how a run writes.
 pub(super) struct Output<'a> {
