@@ -137,7 +137,8 @@ fn start_frame_numbers_files_and_every_reader_follows_it() {
 }
 
 /// A preroll of two frames simulates them unwritten: with nothing in the scene keyed in time,
-/// the first written frame is the no-preroll run's third, byte for byte, at time 0.
+/// the first written frame is the no-preroll run's third, byte for byte, at time 0; progress
+/// lines say which frames are preroll and number the others as their files.
 #[test]
 fn preroll_frames_are_simulated_and_not_written() {
     let dir = temp_dir("preroll");
@@ -146,7 +147,14 @@ fn preroll_frames_are_simulated_and_not_written() {
     ok(&["simulate", plain.to_str().unwrap(), "--out", a.to_str().unwrap(), "--quiet"]);
     let pre = shot(&dir, json!({ "start_frame": 1, "frames": 2, "preroll": 0.08 }));
     let b = dir.join("b");
-    ok(&["simulate", pre.to_str().unwrap(), "--out", b.to_str().unwrap(), "--quiet"]);
+    let o = viewcloth(&["simulate", pre.to_str().unwrap(), "--out", b.to_str().unwrap(), "--progress", "lines"]);
+    let log = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{log}");
+    // Progress lines name frames as the files do.
+    assert!(
+        log.contains(": preroll frame 1/2,") && log.contains(": frame 1/3,") && log.contains(": frame 3/3,"),
+        "{log}"
+    );
     assert_eq!(names(&b, "frame_"), ["frame_0001.obj", "frame_0002.obj", "frame_0003.obj"]);
     for k in 0..3 {
         let (x, y) = (format!("frame_{:04}.obj", k + 2), format!("frame_{:04}.obj", k + 1));

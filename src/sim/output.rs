@@ -149,7 +149,8 @@ impl Output<'_> {
         wall_before: f64,
     ) -> Result<RunStats, RunError> {
         let started = Instant::now();
-        let report = Reporter::start(progress, &sim.scene.name, first, last);
+        let mut report = Reporter::start(progress, &sim.scene.name, first, last);
+        (report.start_frame, report.preroll) = (sim.scene.start_frame, sim.scene.preroll_frames);
         for k in first..=last {
             let clock = Instant::now();
             if k > 0 {
