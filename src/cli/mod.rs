@@ -326,7 +326,7 @@ pub fn batch(args: BatchArgs) -> Result<(), CliError> {
     if args.emit.is_some() {
         let dir = args.out.clone().unwrap_or_else(|| Path::new("out").join(format!("{stem}-slurm")));
         let cpus = args.threads.or_else(slurm_cpus).unwrap_or(crate::farm::DEFAULT_CPUS_PER_TASK);
-        let emitted = crate::farm::emit_slurm(file, &shots, &dir, cpus).map_err(CliError::Run)?;
+        let emitted = crate::farm::emit_slurm(file, &shots, &dir, cpus, format).map_err(CliError::Run)?;
         println!(
             "{} ({n} array tasks) and {} → sbatch {}",
             emitted.script.display(),
