@@ -5,7 +5,8 @@
 //! short adaptive run that starts at frame 1001 after a preroll, with an exported obstacle:
 //! frame range, points per time code, `UsdGeom.Mesh.ValidateTopology` at every time code,
 //! points, velocities, faces and face-varying st equal to the run's OBJ frames (written with
-//! their `nv` velocity lines).
+//! their `nv` velocity lines); and the same for that run resampled onto one topology
+//! (`resample --auto`).
 //!
 //! When Python or `usd-core` cannot be had (no python3, no package registry) the test fails,
 //! saying so, unless `VIEWCLOTH_USD_TEST=skip` allows skipping it: a skipped run is never
@@ -75,7 +76,7 @@ fn usd_python() -> Result<PathBuf, String> {
 
 /// Per frame number, what the run's OBJ frame holds: positions, `nv` velocities, faces (node
 /// indices) and each face's corner UVs.
-fn obj_frames(dir: &Path, frames: usize) -> Value {
+fn obj_frames(dir: &Path, frames: usize, nv: bool) -> Value {
     let mut out = serde_json::Map::new();
     for n in START..=START + frames {
         let text = std::fs::read_to_string(dir.join(format!("frame_{n:04}.obj"))).unwrap();
@@ -88,7 +89,7 @@ fn obj_frames(dir: &Path, frames: usize) -> Value {
                 [c[0], c[1], c[2]]
             })
             .collect();
-        assert_eq!(velocities.len(), obj.positions.len(), "frame {n}: one nv line per v");
+        assert_eq!(velocities.len(), if nv { obj.positions.len() } else { 0 }, "frame {n}: nv lines");
         let faces: Vec<[usize; 3]> = obj.triangles.iter().map(|t| t.map(|c| c.v)).collect();
         let uvs: Vec<Vec<[f64; 2]>> = obj
             .triangles
@@ -96,7 +97,11 @@ fn obj_frames(dir: &Path, frames: usize) -> Value {
             .map(|t| t.iter().map(|c| obj.texcoords[c.vt.unwrap()]).map(|u| [u.x, u.y]).collect())
             .collect();
         let points: Vec<[f64; 3]> = obj.positions.iter().map(|p| [p.x, p.y, p.z]).collect();
-        out.insert(n.to_string(), json!({ "points": points, "velocities": velocities, "faces": faces, "uvs": uvs }));
+        let mut frame = json!({ "points": points, "faces": faces, "uvs": uvs });
+        if nv {
+            frame["velocities"] = json!(velocities);
+        }
+        out.insert(n.to_string(), frame);
     }
     Value::Object(out)
 }
@@ -121,16 +126,32 @@ fn usd_layer_reads_back_in_pixar_usd_with_the_runs_frames_and_velocities() {
     let expected = json!({
         "start": START, "end": START + frames, "fps": 25,
         "cloth": "/World/cloth/sheet", "obstacles": ["/World/obstacles/sphere"],
-        "frames": obj_frames(&o, frames),
+        "frames": obj_frames(&o, frames, true),
     });
+    check(&python, &o.join("cloth.usda"), &expected, &dir);
+
+    // The run resampled onto one topology (`resample --auto`): its layer too, against its OBJ
+    // frames (the velocities, interpolated from the run's, are only counted).
+    let r = dir.join("resampled");
+    run(&["resample", o.to_str().unwrap(), "--auto", "--out", r.to_str().unwrap()]);
+    let expected = json!({
+        "start": START, "end": START + frames, "fps": 25,
+        "cloth": "/World/cloth/resampled", "obstacles": [],
+        "frames": obj_frames(&r, frames, false),
+    });
+    check(&python, &r.join("cloth.usda"), &expected, &dir);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Runs tests/usd/check.py on `layer` against `expected`.
+fn check(python: &Path, layer: &Path, expected: &Value, dir: &Path) {
     let expected_file = dir.join("expected.json");
     std::fs::write(&expected_file, expected.to_string()).unwrap();
     let check = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/usd/check.py");
-    let out = Command::new(&python).arg(&check).arg(o.join("cloth.usda")).arg(&expected_file).output().unwrap();
+    let out = Command::new(python).arg(&check).arg(layer).arg(&expected_file).output().unwrap();
     let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     eprintln!("{text}");
-    assert!(out.status.success(), "tests/usd/check.py:\n{text}");
-    std::fs::remove_dir_all(&dir).ok();
+    assert!(out.status.success(), "tests/usd/check.py {}:\n{text}", layer.display());
 }
 
 /// The layer of a run stopped (by SIGTERM, or by reaching a shorter `--frames`) and resumed is
