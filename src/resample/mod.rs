@@ -168,9 +168,7 @@ pub fn resample(run_dir: &Path, target: &Target, out: &Path) -> Result<ResampleR
     };
     std::fs::create_dir_all(out.join(usd::SAMPLES_DIR))
         .map_err(|source| ResampleError::Io { path: out.into(), source })?;
-    let digits = (4..=20)
-        .find(|&w| files.frame_path(first.frame).ends_with(format!("frame_{:0w$}.obj", first.frame)))
-        .unwrap_or(4);
+    let digits = files.digits();
     let triangles: Vec<[usize; 3]> = fixed.triangles.iter().map(|t| t.map(|c| c.0)).collect();
     let st_indices: Vec<[usize; 3]> = fixed.triangles.iter().map(|t| t.map(|c| c.1)).collect();
     let mut report = ResampleReport {
@@ -189,19 +187,8 @@ pub fn resample(run_dir: &Path, target: &Target, out: &Path) -> Result<ResampleR
     let mut cache: Vec<Vec<Vec3>> = Vec::with_capacity(frames.len());
     let mut samples = Vec::with_capacity(frames.len());
     for frame in &frames {
-        let locator = Locator::new(&frame.obj);
-        let mut x = Vec::with_capacity(fixed.node_uv.len());
-        let mut v = Vec::new();
-        for uv in &fixed.node_uv {
-            let hit = locator.locate(uv);
-            report.max_outside = report.max_outside.max(hit.outside);
-            let corners = frame.obj.triangles[hit.triangle].map(|c| c.v);
-            let mix = |p: &[Vec3]| (0..3).map(|k| p[corners[k]] * hit.bary[k]).fold(Vec3::zeros(), |a, b| a + b);
-            x.push(mix(&frame.obj.positions));
-            if let Some(vel) = &frame.velocities {
-                v.push(mix(vel));
-            }
-        }
+        let (x, v, outside) = place(&fixed, frame);
+        report.max_outside = report.max_outside.max(outside);
         let run_tris: Vec<[usize; 3]> = frame.obj.triangles.iter().map(|t| t.map(|c| c.v)).collect();
         let d = surface_distance(
             Surface { positions: &x, triangles: &triangles, weight: None },
@@ -235,6 +222,24 @@ pub fn resample(run_dir: &Path, target: &Target, out: &Path) -> Result<ResampleR
         .map_err(|e| ResampleError::Io { path: json_path.clone(), source: e.into() })?;
     write_atomic(&json_path, &json).map_err(io(&json_path))?;
     Ok(report)
+}
+
+/// The fixed mesh's nodes placed on `frame`: positions, velocities (when the frame has them)
+/// and how far outside the frame's material domain a node was (texture units).
+fn place(fixed: &FixedMesh, frame: &RunFrame) -> (Vec<Vec3>, Vec<Vec3>, Real) {
+    let locator = Locator::new(&frame.obj);
+    let (mut x, mut v, mut outside) = (Vec::with_capacity(fixed.node_uv.len()), Vec::new(), 0.0);
+    for uv in &fixed.node_uv {
+        let hit = locator.locate(uv);
+        outside = hit.outside.max(outside);
+        let corners = frame.obj.triangles[hit.triangle].map(|c| c.v);
+        let mix = |p: &[Vec3]| (0..3).map(|k| p[corners[k]] * hit.bary[k]).fold(Vec3::zeros(), |a, b| a + b);
+        x.push(mix(&frame.obj.positions));
+        if let Some(vel) = &frame.velocities {
+            v.push(mix(vel));
+        }
+    }
+    (x, v, outside)
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ResampleError + '_ {
