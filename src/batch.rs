@@ -17,9 +17,9 @@
 //! ```json
 //! { "version": 1,
 //!   "shots": [ { "scene": "scenes/a.json", "frames": 40, "out": "out/a", "mode": "view",
-//!                "camera": "cameras/pan.json", "checkpoint_every": 10 } ] }
+//!                "camera": "cameras/pan.json", "checkpoint_every": 10, "format": "both" } ] }
 //! ```
-//! Only `scene` is required; `out` defaults to `out/<scene stem>` beside the shots file, and two
+//! Only `scene` is required; `format` (`obj`, `usd` or `both`) defaults to `--format`'s; `out` defaults to `out/<scene stem>` beside the shots file, and two
 //! shots may not share an output directory.
 
 use std::path::{Path, PathBuf};
@@ -28,6 +28,7 @@ use std::sync::Mutex;
 use serde::{Deserialize, Serialize};
 
 use crate::error::InputError;
+use crate::io::OutputFormat;
 use crate::scene::RemeshMode;
 use crate::shot::{self, ShotRequest};
 use crate::sim::checkpoint;
@@ -58,6 +59,8 @@ struct ShotSpec {
     camera: Option<String>,
     #[serde(default)]
     checkpoint_every: Option<u64>,
+    #[serde(default)]
+    format: Option<String>,
 }
 
 /// One validated shot, ready to run.
@@ -68,6 +71,7 @@ pub struct Shot {
     pub out: PathBuf,
     pub frames: Option<usize>,
     checkpoint_every: usize,
+    pub format: OutputFormat,
 }
 
 /// What a shot's output directory asks for.
@@ -82,7 +86,7 @@ pub enum Plan {
 }
 
 impl Shot {
-    /// The shot's last frame.
+    /// The shot's frame count (after its first frame).
     pub fn last_frame(&self) -> usize {
         self.frames.unwrap_or(self.shot.scene.frames)
     }
@@ -91,11 +95,13 @@ impl Shot {
     pub fn plan(&self) -> Plan {
         let Ok((_, ck)) = checkpoint::latest(&self.out) else { return Plan::Fresh };
         let same = ck.run.scene_file == self.shot.scene_file
-            && ck.run.fingerprint == checkpoint::scene_fingerprint(&self.shot.scene);
-        let last = self.last_frame();
+            && ck.run.fingerprint == checkpoint::scene_fingerprint(&self.shot.scene)
+            && ck.run.format == self.format;
+        // Checkpoints count frames from the run's start, preroll included.
+        let last = self.shot.scene.preroll_frames + self.last_frame();
         match ck.state.frame {
             f if !same || f > last => Plan::Fresh,
-            f if f == last && ck.run.frames == last => Plan::Skip,
+            f if f == last && ck.run.frames == self.last_frame() => Plan::Skip,
             f if f == last => Plan::Fresh,
             f => Plan::Resume(f),
         }
@@ -124,7 +130,7 @@ fn err(file: &Path, location: String, msg: impl Into<String>) -> InputError {
 
 /// Reads the shots file and loads and checks every shot's scene and camera, and (unless
 /// `force`) that no output directory holds another scene's run.
-pub fn load(path: &Path, force: bool) -> Result<Vec<Shot>, InputError> {
+pub fn load(path: &Path, force: bool, format: OutputFormat) -> Result<Vec<Shot>, InputError> {
     let text = std::fs::read_to_string(path).map_err(|e| InputError {
         file: path.to_path_buf(),
         location: None,
@@ -161,12 +167,18 @@ pub fn load(path: &Path, force: bool) -> Result<Vec<Shot>, InputError> {
             v => Ok(v.map(|n| n as usize)),
         };
         let frames = positive(s.frames, "frames")?;
+        let format = match s.format.as_deref() {
+            None => format,
+            Some(name) => OutputFormat::parse(name).ok_or_else(|| {
+                err(path, at("format"), format!("expected \"obj\", \"usd\" or \"both\", got \"{name}\""))
+            })?,
+        };
         let checkpoint_every = positive(s.checkpoint_every, "checkpoint_every")?.unwrap_or(DEFAULT_CHECKPOINT_EVERY);
         let out = base.join(s.out.unwrap_or_else(|| format!("out/{}", shot.stem)));
         if let Some(j) = shots.iter().position(|o| o.out == out) {
             return Err(err(path, at("out"), format!("{} is also shot {j}'s output directory", out.display())));
         }
-        let shot = Shot { scene_file, shot, out, frames, checkpoint_every };
+        let shot = Shot { scene_file, shot, out, frames, checkpoint_every, format };
         if !force && shot.plan() == Plan::Fresh {
             crate::sim::check_output(&shot.out, &shot.shot.scene.name, shot.shot.scene_file.as_deref())
                 .map_err(|e| err(path, at("out"), e.to_string()))?;
@@ -219,7 +231,7 @@ fn run_one(shot: Shot, threads: usize, progress: &Progress) -> ShotResult {
     let clock = std::time::Instant::now();
     let plan = shot.plan();
     let last = shot.last_frame();
-    let Shot { scene_file, shot, out, frames, checkpoint_every } = shot;
+    let Shot { scene_file, shot, out, frames, checkpoint_every, format } = shot;
     let result = |status, frames, error: Option<String>| ShotResult {
         scene: scene_file.clone(),
         out: out.clone(),
@@ -232,7 +244,7 @@ fn run_one(shot: Shot, threads: usize, progress: &Progress) -> ShotResult {
     if plan == Plan::Skip {
         return result("skipped", last, None);
     }
-    let opts = RunOptions { out_dir: out.clone(), frames, quiet: true, export_obstacles: false };
+    let opts = RunOptions { out_dir: out.clone(), frames, quiet: true, format, ..Default::default() };
     let ck = CheckpointOptions {
         every: checkpoint_every,
         scene_file: shot.scene_file.clone(),
@@ -241,7 +253,9 @@ fn run_one(shot: Shot, threads: usize, progress: &Progress) -> ShotResult {
     };
     let scene = shot.scene;
     let run = || match plan {
-        Plan::Resume(_) => resume(&out, &ResumeOptions { frames: Some(last), progress: progress.clone() }),
+        Plan::Resume(_) => {
+            resume(&out, &ResumeOptions { frames: Some(last), format: Some(format), progress: progress.clone() })
+        }
         _ => crate::sim::clear_output(&out).and_then(|()| run_shot(scene, &opts, Some(&ck), progress)),
     };
     let outcome = rayon::ThreadPoolBuilder::new()

@@ -11,6 +11,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use crate::batch::Shot;
+use crate::io::OutputFormat;
 
 /// `--cpus-per-task` when neither `--threads` nor `SLURM_CPUS_PER_TASK` gives one.
 pub const DEFAULT_CPUS_PER_TASK: u64 = 4;
@@ -35,7 +36,14 @@ fn absolute(p: &Path) -> Result<PathBuf, String> {
 
 /// Writes `DIR/<stem>.sbatch` (the array job) and `DIR/<stem>.commands` (each task's command
 /// line, resolved, with the shot it runs), and creates `DIR/logs/` for the per-task logs.
-pub fn emit_slurm(shots_file: &Path, shots: &[Shot], dir: &Path, cpus: u64) -> Result<Emitted, String> {
+/// `format` is `batch --format`, passed on to the tasks (omitted when the default, `obj`).
+pub fn emit_slurm(
+    shots_file: &Path,
+    shots: &[Shot],
+    dir: &Path,
+    cpus: u64,
+    format: OutputFormat,
+) -> Result<Emitted, String> {
     let stem = shots_file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "shots".into());
     let exe = std::env::current_exe().map_err(|e| format!("cannot find the viewcloth binary: {e}"))?;
     let shots_abs = absolute(shots_file)?;
@@ -48,8 +56,12 @@ pub fn emit_slurm(shots_file: &Path, shots: &[Shot], dir: &Path, cpus: u64) -> R
     // script); `index`: the shell word of the index in the summary's name.
     let command = |which: &str, index: &str| {
         let summary = dir_abs.join(format!("{stem}.shot"));
+        let format = match format {
+            OutputFormat::Obj => String::new(),
+            f => format!(" --format {}", f.name()),
+        };
         format!(
-            "{} batch {} {which} --threads {cpus} --progress lines --summary {}{index}.batch.json",
+            "{} batch {} {which} --threads {cpus} --progress lines --summary {}{index}.batch.json{format}",
             sh(&exe.to_string_lossy()),
             sh(&shots_abs.to_string_lossy()),
             sh(&summary.to_string_lossy()),

@@ -27,6 +27,7 @@ pub mod mesh;
 pub mod metrics;
 pub mod remesh;
 pub mod render;
+pub mod resample;
 pub mod scene;
 pub mod shot;
 pub mod sim;

@@ -41,6 +41,7 @@ fn main() -> ExitCode {
         Command::Check { files, base } => cli::check(&files, base.as_deref()),
         Command::Compare(args) => cli::compare_modes(args),
         Command::Render(args) => cli::render(args),
+        Command::Resample(args) => cli::resample(args),
         Command::Batch(args) => cli::batch(args),
         Command::Convert { conf, out, base } => cli::convert(&conf, &out, base.as_deref()),
     };

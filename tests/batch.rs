@@ -237,7 +237,14 @@ fn emit_slurm_writes_an_array_script_and_the_command_lines() {
     let lines: Vec<&str> = commands.lines().filter(|l| !l.starts_with('#')).collect();
     assert_eq!(lines.len(), 2, "{commands}");
     assert!(lines[1].contains(" batch ") && lines[1].contains("--shot 1"), "{commands}");
+    assert!(!commands.contains("--format"), "{commands}");
     assert!(!dir.join("a").exists(), "--emit ran a shot");
+    // Issue 14: `--format` reaches the tasks.
+    let f = file.to_str().unwrap();
+    let o = viewcloth(&["batch", f, "--emit", "slurm", "--out", out.to_str().unwrap(), "--format", "usd"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let script = std::fs::read_to_string(out.join("farm shots.sbatch")).unwrap();
+    assert!(script.contains("SLURM_ARRAY_TASK_ID") && script.contains(" --format usd"), "{script}");
     std::fs::remove_dir_all(&dir).ok();
 }
 

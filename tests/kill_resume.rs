@@ -180,6 +180,8 @@ fn restored_state_continues_bitwise() {
         digits: 4,
         export_obstacles: false,
         every: 5,
+        format: Default::default(),
+        obj_velocities: false,
     };
     let path = checkpoint::checkpoint_path(&dir, 5, 4);
     std::fs::write(&path, checkpoint::encode(&run, &a.state, &Default::default())).unwrap();

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 
+use crate::io::OutputFormat;
 use crate::scene::RemeshMode;
 use crate::sim::progress::ProgressMode;
 
@@ -35,6 +36,9 @@ pub enum Command {
     /// Render PNG previews of a run's frames (RUN_DIR/view_NNNN.png) from a camera, shaded or
     /// coloured by the cloth's view factor.
     Render(RenderArgs),
+    /// Resample an adaptive run onto one fixed-topology mesh for the whole shot (OBJ frames, a
+    /// PC2 point cache, a USD layer and the resampling error per frame).
+    Resample(ResampleArgs),
     /// Run many shots from a shots file (JSON list of scenes with per-shot options), several at a
     /// time; a failed shot does not stop the others. A rerun skips finished shots and resumes
     /// interrupted ones.
@@ -74,9 +78,17 @@ pub struct SimulateArgs {
     /// Replace the run of another scene in the output directory (refused without it).
     #[arg(long)]
     pub force: bool,
-    /// Also write each obstacle's world-space mesh per frame beside the cloth frames.
+    /// Also write each obstacle's world-space mesh per frame beside the cloth frames (and as
+    /// prims of the USD layer).
     #[arg(long)]
     pub export_obstacles: bool,
+    /// What is written per frame: `obj` (frame_NNNN.obj), `usd` (one cloth.usda layer with
+    /// every frame as time samples, velocities included) or `both`.
+    #[arg(long, value_parser = OutputFormat::NAMES)]
+    pub format: Option<String>,
+    /// OBJ frames carry each node's velocity (m/s) on an `nv` line after its `v` (ARCSim's).
+    #[arg(long)]
+    pub obj_velocities: bool,
     /// Override the remeshing mode of every cloth with a `remesh` block: `adaptive`, `uniform`
     /// (refined once to the minimum edge length, never remeshed) or `view` (adaptive, scaled by
     /// the camera's view factors; needs a camera).
@@ -98,9 +110,13 @@ pub struct SimulateArgs {
 pub struct ResumeArgs {
     /// Output directory of a run started with --checkpoint-every.
     pub dir: PathBuf,
-    /// Last frame of the continued run (default: the run's own).
+    /// Frames of the continued run after its first (default: the run's own).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
     pub frames: Option<u64>,
+    /// The run's output format (`obj`, `usd` or `both`): checked, a run continues in the
+    /// format it started with.
+    #[arg(long, value_parser = OutputFormat::NAMES)]
+    pub format: Option<String>,
     /// Worker threads (default: all cores). Results are identical for any count.
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
@@ -136,6 +152,10 @@ pub struct BatchArgs {
     /// Replace runs of other scenes in the shots' output directories (refused without it).
     #[arg(long)]
     pub force: bool,
+    /// Output format of the shots that do not give their own `format`: `obj` (default), `usd`
+    /// or `both`.
+    #[arg(long, value_parser = OutputFormat::NAMES)]
+    pub format: Option<String>,
     /// Run only shot N of the list (counted from 0), e.g. as one task of a job array.
     #[arg(long, value_name = "N", conflicts_with = "shot_from_env")]
     pub shot: Option<u64>,
@@ -225,4 +245,23 @@ pub struct RenderArgs {
     /// on a terminal, lines otherwise).
     #[arg(long, value_parser = ProgressMode::NAMES)]
     pub progress: Option<String>,
+}
+
+#[derive(clap::Args)]
+#[command(group(clap::ArgGroup::new("target").required(true).args(["mesh", "auto"])))]
+pub struct ResampleArgs {
+    /// Output directory of a run with OBJ frames (`--format obj` or `both`).
+    #[arg(value_name = "RUN_DIR")]
+    pub dir: PathBuf,
+    /// The fixed mesh: an OBJ whose texture coordinates (in the run's, i.e. the input's, units)
+    /// are the material locations its vertices track (e.g. the garment the scene was made from).
+    #[arg(long, value_name = "OBJ")]
+    pub mesh: Option<PathBuf>,
+    /// Make the fixed mesh from the run: its first frame refined to the finest sizing the run
+    /// ever had at each place.
+    #[arg(long)]
+    pub auto: bool,
+    /// Where to write (frame_NNNN.obj, cloth.pc2, cloth.usda, resample.json).
+    #[arg(long)]
+    pub out: PathBuf,
 }

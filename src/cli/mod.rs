@@ -10,13 +10,14 @@ use std::path::{Path, PathBuf};
 use crate::camera::Camera;
 use crate::compare::{compare, markdown, CompareOptions};
 use crate::error::InputError;
+use crate::io::OutputFormat;
 use crate::render::{render_run, Colouring, RenderOptions};
 use crate::scene::{self, RemeshMode};
 use crate::shot::{self, ShotError, ShotRequest};
 use crate::sim::progress::{Progress, ProgressMode};
 use crate::sim::SimError;
 use crate::sim::{claim_output, interrupt, resume, run_shot, CheckpointOptions, ResumeOptions, RunError, RunOptions};
-use args::{BatchArgs, CompareArgs, RenderArgs, ResumeArgs, SimulateArgs};
+use args::{BatchArgs, CompareArgs, RenderArgs, ResampleArgs, ResumeArgs, SimulateArgs};
 
 /// Exit code for bad input (scene, mesh, command line).
 pub const EXIT_INPUT: u8 = 2;
@@ -125,6 +126,8 @@ pub fn simulate(args: SimulateArgs) -> Result<(), CliError> {
         progress,
         force,
         export_obstacles,
+        format,
+        obj_velocities,
         mode,
         camera,
         checkpoint_every,
@@ -139,7 +142,16 @@ pub fn simulate(args: SimulateArgs) -> Result<(), CliError> {
         print_warnings(path, &shot.warnings);
     }
     let out_dir = out.unwrap_or_else(|| Path::new("out").join(&shot.stem));
-    let opts = RunOptions { out_dir: out_dir.clone(), frames: frames.map(|f| f as usize), quiet, export_obstacles };
+    // clap admits only OutputFormat::NAMES.
+    let format = format.as_deref().and_then(OutputFormat::parse).unwrap_or_default();
+    let opts = RunOptions {
+        out_dir: out_dir.clone(),
+        frames: frames.map(|f| f as usize),
+        quiet,
+        export_obstacles,
+        format,
+        obj_velocities,
+    };
     // Without --checkpoint-every, a checkpoint is written only when a signal stops the run.
     let ck = CheckpointOptions {
         every: checkpoint_every.unwrap_or(0) as usize,
@@ -162,7 +174,8 @@ pub fn resume_run(args: ResumeArgs) -> Result<(), CliError> {
     set_threads(args.threads)?;
     install_interrupt()?;
     let progress = Progress::new(ProgressMode::choose(args.progress.as_deref(), args.quiet));
-    let opts = ResumeOptions { frames: args.frames.map(|f| f as usize), progress };
+    let format = args.format.as_deref().and_then(OutputFormat::parse);
+    let opts = ResumeOptions { frames: args.frames.map(|f| f as usize), format, progress };
     let stats = resume(&args.dir, &opts)?;
     if !args.quiet {
         let resumed = stats.resumed_at.last().copied().unwrap_or(0);
@@ -259,6 +272,28 @@ pub fn render(args: RenderArgs) -> Result<(), CliError> {
     Ok(())
 }
 
+pub fn resample(args: ResampleArgs) -> Result<(), CliError> {
+    use crate::resample::{resample, ResampleError, Target};
+    let target = match args.mesh {
+        Some(m) => Target::Mesh(m),
+        None => Target::Auto,
+    };
+    let r = resample(&args.dir, &target, &args.out).map_err(|e| match e {
+        ResampleError::Input(e) => CliError::Input(e.to_string()),
+        other => CliError::Run(other.to_string()),
+    })?;
+    let worst = r.frames.iter().map(|f| f.max).fold(0.0, f64::max);
+    println!(
+        "{} frames resampled onto {} faces (the run: mean {:.0}, max {}); error max {worst:.3e} m → {}",
+        r.frames.len(),
+        r.faces,
+        r.run_mean_faces,
+        r.run_max_faces,
+        args.out.display()
+    );
+    Ok(())
+}
+
 /// The shot `--shot N` or `--shot-from-env VAR` picks, checked against the list's length.
 fn chosen_shot(args: &BatchArgs, n: usize) -> Result<Option<usize>, CliError> {
     let (index, given) = match (&args.shot, &args.shot_from_env) {
@@ -284,13 +319,14 @@ fn chosen_shot(args: &BatchArgs, n: usize) -> Result<Option<usize>, CliError> {
 
 pub fn batch(args: BatchArgs) -> Result<(), CliError> {
     let file = args.shots.as_path();
-    let shots = crate::batch::load(file, args.force)?;
+    let format = args.format.as_deref().and_then(OutputFormat::parse).unwrap_or_default();
+    let shots = crate::batch::load(file, args.force, format)?;
     let n = shots.len();
     let stem = file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_else(|| "shots".into());
     if args.emit.is_some() {
         let dir = args.out.clone().unwrap_or_else(|| Path::new("out").join(format!("{stem}-slurm")));
         let cpus = args.threads.or_else(slurm_cpus).unwrap_or(crate::farm::DEFAULT_CPUS_PER_TASK);
-        let emitted = crate::farm::emit_slurm(file, &shots, &dir, cpus).map_err(CliError::Run)?;
+        let emitted = crate::farm::emit_slurm(file, &shots, &dir, cpus, format).map_err(CliError::Run)?;
         println!(
             "{} ({n} array tasks) and {} → sbatch {}",
             emitted.script.display(),

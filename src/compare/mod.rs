@@ -162,8 +162,13 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
             }
             // Obstacles exported: the frames are rasterised with them (and `render` shows them). The
             // run's progress bar (on a terminal) unless quiet.
-            let run_opts =
-                RunOptions { out_dir: dir.clone(), frames: opts.frames, quiet: opts.quiet, export_obstacles: true };
+            let run_opts = RunOptions {
+                out_dir: dir.clone(),
+                frames: opts.frames,
+                quiet: opts.quiet,
+                export_obstacles: true,
+                ..Default::default()
+            };
             let progress = Progress { label: Some(format!("{name} run")), ..Progress::new(opts.progress) };
             let stats = run_shot(s, &run_opts, None, &progress)?;
             Ok(run_report(name, dir, &stats))
@@ -248,11 +253,13 @@ fn finished_run(dir: &Path, scene: &Scene, frames: usize) -> Option<RunStats> {
     } else {
         "uniform"
     };
-    let all_frames = stats.frames.len() == frames + 1 && stats.frames.iter().enumerate().all(|(k, f)| f.frame == k);
+    let numbered = |k: usize, f: &crate::io::stats::FrameStats| f.frame == scene.start_frame + k;
+    let all_frames = stats.frames.len() == frames + 1 && stats.frames.iter().enumerate().all(|(k, f)| numbered(k, f));
     let matches = stats.error.is_none() && stats.scene == scene.name && stats.mode == mode && all_frames;
-    let files = RunFiles::scan(dir, frames, frames).ok()?;
-    let obstacles = scene.obstacles.is_empty() || files.obstacles(frames).ok()?.is_some();
-    (matches && obstacles && files.frame_path(frames).is_file()).then_some(stats)
+    let last = scene.start_frame + frames;
+    let files = RunFiles::scan(dir, last, last).ok()?;
+    let obstacles = scene.obstacles.is_empty() || files.obstacles(last).ok()?.is_some();
+    (matches && obstacles && files.frame_path(last).is_file()).then_some(stats)
 }
 
 fn read_stats(dir: &Path) -> Result<RunStats, RunError> {
@@ -334,24 +341,27 @@ fn errors(
 ) -> Result<Errors, RunError> {
     let stats = read_stats(dir)?;
     let last = stats.frames.len().min(ref_stats.frames.len()).saturating_sub(1);
-    let ref_files = RunFiles::scan(reference, 1, last).map_err(RunError::Input)?;
-    let files = RunFiles::scan(dir, 1, last).map_err(RunError::Input)?;
+    // Frames are compared by their place in the run; files are named by their numbers (from
+    // the scene's start_frame).
+    let number = |k: usize| ref_stats.frames.get(k).map_or(k, |f| f.frame);
+    let ref_files = RunFiles::scan(reference, number(1), number(last)).map_err(RunError::Input)?;
+    let files = RunFiles::scan(dir, number(1), number(last)).map_err(RunError::Input)?;
     let mut per_frame = Vec::new();
     let compared: Vec<usize> = (opts.every.max(1)..=last).step_by(opts.every.max(1)).collect();
     let strips = strip::strip_frames(&compared);
     for (k, &f) in compared.iter().enumerate() {
         if !opts.quiet && (k + 1) % compared.len().div_ceil(10).max(1) == 0 {
-            eprintln!("compare: {}: frame {f} ({}/{} compared)", dir.display(), k + 1, compared.len());
+            eprintln!("compare: {}: frame {} ({}/{} compared)", dir.display(), number(f), k + 1, compared.len());
         }
-        let time = ref_stats.frames[f].time;
-        let (r, c) = (frame_mesh(&ref_files, f)?, frame_mesh(&files, f)?);
-        let obstacles = obstacles(&ref_files, bodies, f, time)?;
+        let (time, n) = (ref_stats.frames[f].time, number(f));
+        let (r, c) = (frame_mesh(&ref_files, n)?, frame_mesh(&files, n)?);
+        let obstacles = obstacles(&ref_files, bodies, n, time)?;
         let view = camera.view_at(time);
         let (visible, geometric, geometric_visible, [ir, ic]) = frame_errors(&r, &c, &obstacles, &view, opts);
         if strips.contains(&f) {
-            write_strip(&files.frame_path(f), [&r, &c], &obstacles, &view, [&ir, &ic], opts)?;
+            write_strip(&files.frame_path(n), [&r, &c], &obstacles, &view, [&ir, &ic], opts)?;
         }
-        per_frame.push(FrameErrors { frame: f, time, visible, geometric, geometric_visible });
+        per_frame.push(FrameErrors { frame: n, time, visible, geometric, geometric_visible });
     }
     Ok(mean(per_frame))
 }

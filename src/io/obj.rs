@@ -119,17 +119,22 @@ pub fn parse_obj(text: &str) -> Result<ObjData, ObjError> {
     Ok(d)
 }
 
-/// The OBJ text of one frame: `v` per node (world), `vt` per vert (material coordinates, so
-/// seams keep their separate `vt`), `vn` per node, `f v/vt/vn`; one `o` group per cloth.
-/// Positions print at fixed precision (nanometres), so identical state gives identical bytes.
-pub fn frame_obj(mesh: &Mesh, cloth_names: &[String]) -> String {
-    let mut s = String::with_capacity(mesh.nodes.len() * 80 + mesh.faces.len() * 40);
+/// The OBJ text of one frame: `v` per node (world; followed by ARCSim's `nv` with its velocity
+/// when `velocities`), `vt` per vert (in the input's texture units, so seams keep their
+/// separate `vt`), `vn` per node, `f v/vt/vn`; one `o` group per cloth. Numbers print at fixed
+/// precision (nanometres), so identical state gives identical bytes.
+pub fn frame_obj(mesh: &Mesh, cloths: &[ClothOut], velocities: bool) -> String {
+    let mut s = String::with_capacity(mesh.nodes.len() * if velocities { 130 } else { 80 } + mesh.faces.len() * 40);
     s.push_str("# viewcloth frame\n");
     for n in &mesh.nodes {
         let _ = writeln!(s, "v {:.9} {:.9} {:.9}", n.x.x, n.x.y, n.x.z);
+        if velocities {
+            let _ = writeln!(s, "nv {:.9} {:.9} {:.9}", n.v.x, n.v.y, n.v.z);
+        }
     }
     for v in &mesh.verts {
-        let _ = writeln!(s, "vt {:.9} {:.9}", v.u.x, v.u.y);
+        let uv = v.u / uv_unit(cloths, mesh.nodes[v.node.idx()].cloth);
+        let _ = writeln!(s, "vt {:.9} {:.9}", uv.x, uv.y);
     }
     for n in mesh.node_normals() {
         let _ = writeln!(s, "vn {:.6} {:.6} {:.6}", n.x, n.y, n.z);
@@ -138,7 +143,7 @@ pub fn frame_obj(mesh: &Mesh, cloth_names: &[String]) -> String {
     for (f, face) in mesh.faces.iter().enumerate() {
         let cloth = mesh.nodes[mesh.node_of(face.v[0]).idx()].cloth as usize;
         if current != Some(cloth) {
-            let name = cloth_names.get(cloth).map(String::as_str).unwrap_or("cloth");
+            let name = cloths.get(cloth).map(|c| c.name.as_str()).unwrap_or("cloth");
             let _ = writeln!(s, "o {name}");
             current = Some(cloth);
         }
@@ -158,6 +163,25 @@ pub fn frame_obj(mesh: &Mesh, cloth_names: &[String]) -> String {
         );
     }
     s
+}
+
+/// What the output says of a cloth: its name and the material metres per texture unit.
+#[derive(Clone, Debug)]
+pub struct ClothOut {
+    pub name: String,
+    pub uv_unit: f64,
+}
+
+impl ClothOut {
+    /// The scene's cloths.
+    pub fn of(scene: &crate::scene::Scene) -> Vec<ClothOut> {
+        scene.cloths.iter().map(|c| ClothOut { name: c.name.clone(), uv_unit: c.uv_unit }).collect()
+    }
+}
+
+/// Material metres per texture unit of cloth `c` (1 when unknown).
+pub fn uv_unit(cloths: &[ClothOut], c: u16) -> f64 {
+    cloths.get(c as usize).map_or(1.0, |c| c.uv_unit)
 }
 
 /// The OBJ text of an obstacle's world-space triangle mesh.

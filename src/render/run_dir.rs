@@ -94,6 +94,11 @@ impl RunFiles {
         Ok(RunFiles { dir: dir.to_path_buf(), digits, obstacles: obstacles.into_iter().collect() })
     }
 
+    /// The digits of the run's frame numbers in its file names.
+    pub fn digits(&self) -> usize {
+        self.digits
+    }
+
     pub fn frame_path(&self, frame: usize) -> PathBuf {
         self.dir.join(frame_name(frame, self.digits))
     }

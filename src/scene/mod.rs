@@ -39,6 +39,10 @@ pub struct Cloth {
     pub remesh: Option<Remesh>,
     /// Rest dihedral angles are zero (ARCSim) instead of the input mesh's.
     pub flat_rest: bool,
+    /// Material metres per unit of the input's texture coordinates (`uv_scale` × the cloth's
+    /// `transform.scale`; for a mesh without `vt` or a rectangle, the scale alone): output UVs
+    /// are material coordinates divided by it, so they are in the input's units.
+    pub uv_unit: Real,
 }
 
 /// Whether a cloth's mesh adapts every few frames or is refined once.
@@ -155,7 +159,13 @@ pub struct Scene {
     pub file: PathBuf,
     pub frame_time: Real,
     pub steps_per_frame: usize,
+    /// Frames written after the first (the first is the state at time 0).
     pub frames: usize,
+    /// The number of the first written frame, in file names and USD time codes.
+    pub start_frame: usize,
+    /// Frames simulated before the first written one: the run starts at time
+    /// −`preroll_frames` × `frame_time`, so that written frame k is at time k × `frame_time`.
+    pub preroll_frames: usize,
     pub gravity: Vec3,
     pub wind: Option<Wind>,
     pub cloths: Vec<Cloth>,
@@ -194,6 +204,17 @@ impl Scene {
             }),
             None => Ok(()),
         }
+    }
+
+    /// The number (file names, USD time codes) of the frame `k` frames after the run's start,
+    /// preroll included; `None` for a preroll frame, which is not written.
+    pub fn frame_number(&self, k: usize) -> Option<usize> {
+        k.checked_sub(self.preroll_frames).map(|w| self.start_frame + w)
+    }
+
+    /// The time at which the run starts (negative with a preroll).
+    pub fn start_time(&self) -> Real {
+        -(self.preroll_frames as Real) * self.frame_time
     }
 
     pub fn time_step(&self) -> Real {

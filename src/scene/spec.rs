@@ -29,6 +29,12 @@ pub struct SceneSpec {
     pub frames: Option<i64>,
     #[serde(default)]
     pub end_time: Option<f64>,
+    /// The number of the first written frame (file names, USD time codes), e.g. 1001.
+    #[serde(default)]
+    pub start_frame: Option<i64>,
+    /// Seconds simulated before the first written frame (a whole number of frames).
+    #[serde(default)]
+    pub preroll: Option<f64>,
     #[serde(default = "default_gravity")]
     pub gravity: [f64; 3],
     #[serde(default)]
@@ -384,7 +390,8 @@ pub struct CapsuleSpec {
 }
 
 /// A per-frame OBJ sequence: files `pattern` formatted with `first`, `first + 1`, …,
-/// `first + count − 1` (printf style, `%d` or zero-padded `%04d`), relative to the scene file.
+/// `first + count − 1` (printf style `%d` or zero-padded `%04d`, Houdini's `$F` / `$F4`, or a
+/// run of `#`, one per digit: `####`), relative to the scene file.
 /// File k is the obstacle's local shape at time `start_time + k / fps`; positions are linearly
 /// interpolated between files and held before the first and after the last. Every file must have
 /// the vertex count and faces of the first.

@@ -14,6 +14,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::io::stats::RunStats;
+use crate::io::OutputFormat;
 use crate::math::{Vec2, Vec3};
 use crate::mesh::{Face, Mesh, Node, NodeId, Vert, VertId};
 use crate::scene::{RemeshMode, Scene};
@@ -21,7 +22,7 @@ use crate::scene::{RemeshMode, Scene};
 use super::SimState;
 
 const MAGIC: &[u8; 8] = b"VCLOTHCK";
-const FORMAT_VERSION: u32 = 3;
+const FORMAT_VERSION: u32 = 4;
 /// File names: `checkpoint_<frame>.bin`.
 const PREFIX: &str = "checkpoint_";
 const SUFFIX: &str = ".bin";
@@ -47,13 +48,16 @@ pub struct RunRecord {
     pub camera_file: Option<PathBuf>,
     /// `scene_fingerprint` of the scene as loaded (after the override).
     pub fingerprint: u64,
-    /// Last frame of the run.
+    /// Frames written after the first (the scene's `frames`, or `--frames`).
     pub frames: usize,
     /// Digits of the frame numbers in file names.
     pub digits: usize,
     pub export_obstacles: bool,
     /// A checkpoint every this many frames.
     pub every: usize,
+    /// What is written per frame, and whether OBJ frames carry velocities (`nv`).
+    pub format: OutputFormat,
+    pub obj_velocities: bool,
 }
 
 pub struct Checkpoint {
@@ -154,6 +158,8 @@ pub fn encode(run: &RunRecord, st: &SimState, stats: &RunStats) -> Vec<u8> {
     w.usize(run.digits);
     w.u8(run.export_obstacles as u8);
     w.usize(run.every);
+    w.u8(run.format as u8);
+    w.u8(run.obj_velocities as u8);
     // State.
     w.usize(st.frame);
     w.u64(st.steps);
@@ -241,6 +247,13 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
         digits: r.usize()?,
         export_obstacles: r.u8()? != 0,
         every: r.usize()?,
+        format: match r.u8()? {
+            0 => OutputFormat::Obj,
+            1 => OutputFormat::Usd,
+            2 => OutputFormat::Both,
+            k => return Err(format!("bad output format tag {k}")),
+        },
+        obj_velocities: r.u8()? != 0,
     };
     let (frame, steps, time, pushed_out) = (r.usize()?, r.u64()?, r.f64()?, r.usize()?);
     let mut mesh = Mesh::default();
@@ -388,6 +401,8 @@ mod tests {
             digits: 4,
             export_obstacles: false,
             every: 2,
+            format: OutputFormat::Both,
+            obj_velocities: true,
         };
         let bytes = encode(&run, &st, &RunStats::default());
         let back = decode(&bytes).unwrap();

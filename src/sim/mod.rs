@@ -7,6 +7,7 @@ mod adapt;
 pub mod checkpoint;
 pub mod checks;
 pub mod interrupt;
+pub mod output;
 pub mod progress;
 pub mod recover;
 mod run;
@@ -31,6 +32,7 @@ use crate::mesh::Mesh;
 use crate::scene::{RemeshMode, Scene};
 use crate::solver::SolveError;
 use checks::Elastic;
+use run::{file_safe, io_err};
 
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {

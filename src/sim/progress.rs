@@ -63,6 +63,10 @@ pub(super) struct Reporter {
     started: Instant,
     first: usize,
     last: usize,
+    /// The number of the first written frame and the frames simulated before it: lines name
+    /// frames as their files do.
+    pub(super) start_frame: usize,
+    pub(super) preroll: usize,
 }
 
 impl Reporter {
@@ -84,7 +88,7 @@ impl Reporter {
             bar.set_position(first as u64);
             bar
         });
-        Reporter { mode: p.mode, label, bar, started: Instant::now(), first, last }
+        Reporter { mode: p.mode, label, bar, started: Instant::now(), first, last, start_frame: 0, preroll: 0 }
     }
 
     /// Frame `f` is written; it took `wall_s` and has `faces` faces.
@@ -99,7 +103,11 @@ impl Reporter {
         let mean = self.started.elapsed().as_secs_f64() / done as f64;
         let eta = mean * (self.last - f) as f64;
         // eprintln writes unbuffered: the line is in the log when the frame is on disk.
-        eprintln!("{}: frame {f}/{}, {wall_s:.2} s/frame, {faces} faces, ETA {}", self.label, self.last, clock(eta));
+        let frame = match f.checked_sub(self.preroll) {
+            Some(w) => format!("frame {}/{}", self.start_frame + w, self.start_frame + self.last - self.preroll),
+            None => format!("preroll frame {f}/{}", self.preroll),
+        };
+        eprintln!("{}: {frame}, {wall_s:.2} s/frame, {faces} faces, ETA {}", self.label, clock(eta));
     }
 
     pub(super) fn finish(self) {

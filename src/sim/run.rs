@@ -1,30 +1,36 @@
-//! Running a shot: frames out to OBJ, stats to JSON, checkpoints, progress to the terminal.
-//! Every file is written to a temporary name and renamed into place (`io::write_atomic`), in
-//! the order frame → stats.json → checkpoint, so a run killed at any instant leaves complete
-//! files only, and a checkpoint never refers to a frame that is not on disk.
+//! Running a shot: frames out to OBJ and USD (`output`), stats to JSON, checkpoints, progress
+//! to the terminal. Every file is written to a temporary name and renamed into place
+//! (`io::write_atomic`), in the order frame (OBJ, USD samples) → stats.json → checkpoint, so a
+//! run killed at any instant leaves complete files only, and a checkpoint never refers to a
+//! frame that is not on disk.
 
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 use crate::error::InputError;
-use crate::io::obj::{frame_obj, obstacle_obj};
-use crate::io::stats::{CollisionFrameStats, RemeshFrameStats, RunStats};
-use crate::io::write_atomic;
+use crate::io::obj::ClothOut;
+use crate::io::stats::RunStats;
+use crate::io::OutputFormat;
 use crate::scene::{RemeshMode, Scene};
 use crate::shot::{self, ShotRequest};
 
 use super::checkpoint::{self, CheckpointError, RunRecord};
-use super::progress::{Progress, ProgressMode, Reporter};
-use super::timers::Stage;
+use super::output::{Output, USD_FILE, USD_SAMPLES};
+use super::progress::{Progress, ProgressMode};
 use super::{SimError, Simulation};
 
+#[derive(Default)]
 pub struct RunOptions {
     pub out_dir: PathBuf,
     /// Overrides the scene's frame count.
     pub frames: Option<usize>,
     pub quiet: bool,
-    /// Also write each obstacle's world-space mesh per frame (`obstacle_<name>_NNNN.obj`).
+    /// Also write each obstacle's world-space mesh per frame (`obstacle_<name>_NNNN.obj`, and
+    /// a prim in the USD layer).
     pub export_obstacles: bool,
+    /// OBJ frames, the USD layer, or both.
+    pub format: OutputFormat,
+    /// OBJ frames carry each node's velocity on an `nv` line (ARCSim's).
+    pub obj_velocities: bool,
 }
 
 /// Checkpointing of a run: every `every` frames (and at the last; `every` 0: only when the run
@@ -50,28 +56,34 @@ pub enum RunError {
     Checkpoint(#[from] CheckpointError),
     #[error("{0}")]
     Input(InputError),
-    /// SIGTERM or SIGINT: the run stopped after frame `frame`, checkpointed when it could be.
-    #[error("{}", interrupted_message(.dir, *.frame, *.last, .checkpoint.as_deref()))]
-    Interrupted { dir: PathBuf, frame: usize, last: usize, checkpoint: Option<PathBuf> },
+    /// An output file could not be made from the run's own files (e.g. a damaged USD samples
+    /// file).
+    #[error("{0}")]
+    Output(String),
+    /// SIGTERM or SIGINT: the run stopped after the frame `at` describes, checkpointed when
+    /// it could be.
+    #[error("{}", interrupted_message(.dir, .at, .checkpoint.as_deref()))]
+    Interrupted { dir: PathBuf, at: String, checkpoint: Option<PathBuf> },
 }
 
-fn interrupted_message(dir: &Path, frame: usize, last: usize, checkpoint: Option<&Path>) -> String {
+fn interrupted_message(dir: &Path, at: &str, checkpoint: Option<&Path>) -> String {
     match checkpoint {
         Some(ck) => format!(
-            "interrupted after frame {frame} of {last}; checkpoint {}: continue with `viewcloth resume {}`",
+            "interrupted after {at}; checkpoint {}: continue with `viewcloth resume {}`",
             ck.display(),
             dir.display()
         ),
-        None => format!("interrupted after frame {frame} of {last} (no checkpoint: the run was not checkpointed)"),
+        None => format!("interrupted after {at} (no checkpoint: the run was not checkpointed)"),
     }
 }
 
-fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
+pub(super) fn io_err(path: &Path) -> impl FnOnce(std::io::Error) -> RunError + '_ {
     move |source| RunError::Io { path: path.to_path_buf(), source }
 }
 
-/// Simulates `scene`, writing `frame_NNNN.obj` (frame 0 is the initial state) and `stats.json`
-/// (rewritten after every frame, so it is valid at any instant) into `opts.out_dir`.
+/// Simulates `scene`, writing `frame_NNNN.obj` (numbered from the scene's `start_frame`, the
+/// initial state first) and/or the USD layer, and `stats.json` (rewritten after every frame, so
+/// it is valid at any instant) into `opts.out_dir`.
 pub fn run(scene: Scene, opts: &RunOptions) -> Result<RunStats, RunError> {
     run_with_checkpoints(scene, opts, None)
 }
@@ -94,7 +106,7 @@ pub fn run_shot(
     progress: &Progress,
 ) -> Result<RunStats, RunError> {
     let frames = opts.frames.unwrap_or(scene.frames);
-    let digits = frames.to_string().len().max(4);
+    let digits = (scene.start_frame + frames).to_string().len().max(4);
     let record = ck.map(|c| RunRecord {
         scene_file: c.scene_file.clone(),
         mode: c.mode,
@@ -104,10 +116,12 @@ pub fn run_shot(
         digits,
         export_obstacles: opts.export_obstacles,
         every: c.every,
+        format: opts.format,
+        obj_velocities: opts.obj_velocities,
     });
-    let names: Vec<String> = scene.cloths.iter().map(|c| c.name.clone()).collect();
+    let cloths = ClothOut::of(&scene);
+    let last = scene.preroll_frames + frames;
     let mut sim = Simulation::new(scene)?;
-    std::fs::create_dir_all(&opts.out_dir).map_err(io_err(&opts.out_dir))?;
     let adaptive = is_adaptive(&sim.scene);
     let view = sim.scene.cloths.iter().any(|c| c.remesh.as_ref().is_some_and(|r| r.mode == RemeshMode::View));
     let mode = if view {
@@ -118,14 +132,27 @@ pub fn run_shot(
         "uniform"
     };
     let stats = RunStats { scene: sim.scene.name.clone(), mode: mode.into(), ..Default::default() };
-    let out = Output { dir: &opts.out_dir, names, digits, export_obstacles: opts.export_obstacles, record, adaptive };
-    out.frames(&mut sim, stats, 0, frames, progress, 0.0)
+    let out = Output {
+        dir: &opts.out_dir,
+        cloths,
+        digits,
+        export_obstacles: opts.export_obstacles,
+        format: opts.format,
+        obj_velocities: opts.obj_velocities,
+        record,
+        adaptive,
+    };
+    out.prepare()?;
+    out.frames(&mut sim, stats, 0, last, progress, 0.0)
 }
 
 /// Options of `viewcloth resume`.
 pub struct ResumeOptions {
-    /// New last frame (default: the run's own).
+    /// New frame count (default: the run's own).
     pub frames: Option<usize>,
+    /// The output format asked for: it must be the run's own (a layer cannot gain the frames
+    /// written before in another format).
+    pub format: Option<OutputFormat>,
     pub progress: Progress,
 }
 
@@ -152,34 +179,52 @@ pub fn resume(dir: &Path, opts: &ResumeOptions) -> Result<RunStats, RunError> {
             ),
         }));
     }
-    let first = ck.state.frame;
-    let frames = opts.frames.unwrap_or(record.frames);
-    if frames <= first {
+    if let Some(format) = opts.format.filter(|&f| f != record.format) {
         return Err(RunError::Input(InputError {
             file: path.clone(),
             location: None,
-            msg: format!("--frames {frames}: the checkpoint is at frame {first}; expected a last frame after it"),
+            msg: format!(
+                "--format {}: the run writes {}; resume continues it so (start a new run for another format)",
+                format.name(),
+                record.format.name()
+            ),
+        }));
+    }
+    let first = ck.state.frame;
+    let frames = opts.frames.unwrap_or(record.frames);
+    let last = scene.preroll_frames + frames;
+    if last <= first {
+        let at = scene.frame_number(first).map_or(format!("preroll frame {first}"), |n| format!("frame {n}"));
+        return Err(RunError::Input(InputError {
+            file: path.clone(),
+            location: None,
+            msg: format!("--frames {frames}: the checkpoint is at {at}; expected more frames than that"),
         }));
     }
     record.frames = frames;
     remove_stale_temporaries(dir);
-    let names: Vec<String> = scene.cloths.iter().map(|c| c.name.clone()).collect();
+    remove_stale_temporaries(&dir.join(USD_SAMPLES));
+    let cloths = ClothOut::of(&scene);
     let mut sim = Simulation::restore(scene, ck.state)?;
     let mut stats = ck.stats;
-    stats.frames.truncate(first + 1);
+    let kept = sim.scene.frame_number(first);
+    stats.frames.retain(|f| kept.is_some_and(|n| f.frame <= n));
     stats.resumed_at.push(first);
     stats.error = None;
     let adaptive = is_adaptive(&sim.scene);
     let out = Output {
         dir,
-        names,
+        cloths,
         digits: record.digits,
         export_obstacles: record.export_obstacles,
+        format: record.format,
+        obj_velocities: record.obj_velocities,
         record: Some(record),
         adaptive,
     };
+    out.prepare()?;
     let wall_before = stats.total_wall_s;
-    out.frames(&mut sim, stats, first + 1, frames, &opts.progress, wall_before)
+    out.frames(&mut sim, stats, first + 1, last, &opts.progress, wall_before)
 }
 
 /// Readies `dir` for a fresh run of the scene named `scene_name` (file `scene_file`): refused
@@ -209,17 +254,26 @@ pub fn check_output(dir: &Path, scene_name: &str, scene_file: Option<&Path>) -> 
     }
 }
 
-/// Removes the files of a run in `dir` (frames, obstacle meshes, checkpoints, stats.json).
+/// Removes the files of a run in `dir` (frames, obstacle meshes, USD layer and samples,
+/// checkpoints, stats.json).
 pub fn clear_output(dir: &Path) -> Result<(), RunError> {
     for p in run_files(dir) {
         std::fs::remove_file(&p).map_err(io_err(&p))?;
+    }
+    let samples = dir.join(USD_SAMPLES);
+    if samples.is_dir() {
+        std::fs::remove_dir_all(&samples).map_err(io_err(&samples))?;
     }
     Ok(())
 }
 
 fn run_files(dir: &Path) -> Vec<PathBuf> {
     let Ok(entries) = std::fs::read_dir(dir) else { return Vec::new() };
-    entries.flatten().map(|e| e.path()).filter(|p| is_run_file(p)).collect()
+    let mut files: Vec<PathBuf> = entries.flatten().map(|e| e.path()).filter(|p| is_run_file(p)).collect();
+    if let Ok(samples) = std::fs::read_dir(dir.join(USD_SAMPLES)) {
+        files.extend(samples.flatten().map(|e| e.path()).filter(|p| p.is_file()));
+    }
+    files
 }
 
 /// The run in `dir` when it is not one of this scene, described.
@@ -241,13 +295,15 @@ fn other_run(dir: &Path, scene_name: &str, scene_file: Option<&Path>) -> Option<
     }
 }
 
-/// A file a run writes: frame, obstacle mesh, checkpoint, stats.json.
+/// A file a run writes in its directory: frame, obstacle mesh, USD layer, checkpoint,
+/// stats.json (the USD samples are in their own folder).
 fn is_run_file(path: &Path) -> bool {
     let Some(name) = path.file_name().and_then(|n| n.to_str()) else { return false };
     let numbered = |prefix: &str, suffix: &str| {
         name.strip_prefix(prefix).and_then(|n| n.strip_suffix(suffix)).is_some_and(|n| !n.is_empty())
     };
     name == "stats.json"
+        || name == USD_FILE
         || numbered("frame_", ".obj")
         || numbered("obstacle_", ".obj")
         || numbered("checkpoint_", ".bin")
@@ -268,173 +324,7 @@ fn remove_stale_temporaries(dir: &Path) {
     }
 }
 
-/// Where and how a run writes.
-struct Output<'a> {
-    dir: &'a Path,
-    names: Vec<String>,
-    digits: usize,
-    export_obstacles: bool,
-    /// Present when checkpointing.
-    record: Option<RunRecord>,
-    adaptive: bool,
-}
-
-impl Output<'_> {
-    fn frame_path(&self, f: usize) -> PathBuf {
-        self.dir.join(format!("frame_{f:0w$}.obj", w = self.digits))
-    }
-
-    fn write_frame(&self, sim: &mut Simulation, f: usize) -> Result<(), RunError> {
-        let path = self.frame_path(f);
-        let clock = Instant::now();
-        write_atomic(&path, frame_obj(&sim.state.mesh, &self.names).as_bytes()).map_err(io_err(&path))?;
-        if self.export_obstacles {
-            if let Some(world) = &sim.ws.collisions {
-                for (body, obstacle) in world.bodies.iter().zip(&sim.scene.obstacles) {
-                    let path =
-                        self.dir.join(format!("obstacle_{}_{f:0w$}.obj", file_safe(&obstacle.name), w = self.digits));
-                    let text = obstacle_obj(&body.positions_at(sim.state.time), body.triangles());
-                    write_atomic(&path, text.as_bytes()).map_err(io_err(&path))?;
-                }
-            }
-        }
-        sim.ws.timers.since(Stage::Output, clock);
-        Ok(())
-    }
-
-    fn write_stats(&self, stats: &RunStats) -> Result<(), RunError> {
-        let path = self.dir.join("stats.json");
-        let json =
-            serde_json::to_vec_pretty(stats).map_err(|e| RunError::Io { path: path.clone(), source: e.into() })?;
-        write_atomic(&path, &json).map_err(io_err(&path))
-    }
-
-    /// Writes the checkpoint of frame `f` when due (every `every` frames and at the last) or
-    /// `now`, then removes all but it and the one before it. Returns its path when written.
-    fn checkpoint(
-        &self,
-        sim: &mut Simulation,
-        stats: &RunStats,
-        f: usize,
-        last: usize,
-        now: bool,
-    ) -> Result<Option<PathBuf>, RunError> {
-        let Some(record) = &self.record else { return Ok(None) };
-        let due = record.every > 0 && f > 0 && (f.is_multiple_of(record.every) || f == last);
-        if !due && !now {
-            return Ok(None);
-        }
-        let clock = Instant::now();
-        let path = checkpoint::checkpoint_path(self.dir, f, self.digits);
-        write_atomic(&path, &checkpoint::encode(record, &sim.state, stats)).map_err(io_err(&path))?;
-        let old = checkpoint::list(self.dir).map_err(io_err(self.dir))?;
-        for (_, p) in old.iter().filter(|(k, _)| *k < f).skip(1) {
-            let _ = std::fs::remove_file(p);
-        }
-        sim.ws.timers.since(Stage::Checkpoint, clock);
-        Ok(Some(path))
-    }
-
-    /// Frames `first..=last` (frame 0 is the initial state, not simulated); `wall_before` is
-    /// the wall time of earlier sessions of the run.
-    fn frames(
-        &self,
-        sim: &mut Simulation,
-        mut stats: RunStats,
-        first: usize,
-        last: usize,
-        progress: &Progress,
-        wall_before: f64,
-    ) -> Result<RunStats, RunError> {
-        let started = Instant::now();
-        let report = Reporter::start(progress, &sim.scene.name, first, last);
-        for f in first..=last {
-            let clock = Instant::now();
-            if f > 0 {
-                if let Err(e) = sim.advance_frame() {
-                    // The frames written so far stay; stats.json says why the run stopped.
-                    stats.error = Some(format!("frame {f}: {e}"));
-                    stats.total_wall_s = wall_before + started.elapsed().as_secs_f64();
-                    self.write_stats(&stats)?;
-                    return Err(e.into());
-                }
-            }
-            self.write_frame(sim, f)?;
-            let mut fs = sim.measure(f);
-            if self.adaptive {
-                let r = std::mem::take(&mut sim.ws.remesh_stats);
-                fs.remesh = Some(RemeshFrameStats { splits: r.splits, flips: r.flips, collapses: r.collapses });
-            }
-            if sim.ws.collisions.is_some() {
-                let clock = Instant::now();
-                let c = std::mem::take(&mut sim.ws.counters);
-                fs.collision = Some(CollisionFrameStats {
-                    contacts: c.contacts,
-                    impacts: c.impacts,
-                    impact_zones: c.impact_zones,
-                    ccd_iterations: c.ccd_iterations,
-                    ccd_cap_hits: c.cap_hits,
-                    failed_zones: c.failed_zones,
-                    penetrations: sim.penetrations(),
-                    sticking: c.sticking,
-                    sliding: c.sliding,
-                    friction_resolves: c.friction_resolves,
-                    friction_refactors: c.friction_refactors,
-                    friction_unconverged: c.friction_unconverged,
-                });
-                sim.ws.timers.since(Stage::PenetrationCheck, clock);
-            }
-            let faults = std::mem::take(&mut sim.ws.faults);
-            fs.steps = faults.steps;
-            fs.retries = faults.retries;
-            fs.min_step = faults.min_step;
-            fs.faults = faults.kinds;
-            stats.retries += fs.retries;
-            if f > 0 && (stats.min_step == 0.0 || fs.min_step < stats.min_step) {
-                stats.min_step = fs.min_step;
-            }
-            fs.stage_s = sim.ws.timers.take();
-            fs.wall_s = clock.elapsed().as_secs_f64();
-            stats.frames.push(fs);
-            for stage in sim.ws.timers.ran() {
-                if !stats.stages.iter().any(|s| s == stage) {
-                    stats.stages.push(stage.to_string());
-                }
-            }
-            stats.total_wall_s = wall_before + started.elapsed().as_secs_f64();
-            self.write_stats(&stats)?;
-            self.checkpoint(sim, &stats, f, last, false)?;
-            report.frame(f, fs_wall(&stats), sim.state.mesh.faces.len());
-            if f < last && super::interrupt::requested() {
-                report.finish();
-                return self.interrupted(sim, stats, f, last);
-            }
-        }
-        report.finish();
-        Ok(stats)
-    }
-
-    /// Stops the run after frame `f` (a signal): its checkpoint, then stats.json saying so.
-    fn interrupted(
-        &self,
-        sim: &mut Simulation,
-        mut stats: RunStats,
-        f: usize,
-        last: usize,
-    ) -> Result<RunStats, RunError> {
-        let checkpoint = self.checkpoint(sim, &stats, f, last, true)?;
-        stats.error = Some(format!("interrupted after frame {f} (SIGTERM or SIGINT)"));
-        self.write_stats(&stats)?;
-        Err(RunError::Interrupted { dir: self.dir.to_path_buf(), frame: f, last, checkpoint })
-    }
-}
-
-/// The wall time of the last frame recorded.
-fn fs_wall(stats: &RunStats) -> f64 {
-    stats.frames.last().map_or(0.0, |f| f.wall_s)
-}
-
 /// A name reduced to characters safe in a file name.
-fn file_safe(name: &str) -> String {
+pub(super) fn file_safe(name: &str) -> String {
     name.chars().map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '_' { c } else { '_' }).collect()
 }

@@ -38,7 +38,7 @@ pub struct SimState {
 }
 
 impl SimState {
-    /// The state at load: the scene's input mesh at time 0, rest angles from its shape (zero on
+    /// The state at load: the scene's input mesh at the start time (0, or before it the preroll), rest angles from its shape (zero on
     /// cloths that rest flat).
     pub fn initial(scene: &Scene) -> SimState {
         let mesh = scene.mesh.clone();
@@ -46,7 +46,7 @@ impl SimState {
         SimState {
             frame: 0,
             steps: 0,
-            time: 0.0,
+            time: scene.start_time(),
             pushed_out: 0,
             handle_nodes: scene.handles.iter().map(|h| h.nodes.clone()).collect(),
             rest_angles,

@@ -121,6 +121,7 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
         (None, None) => return Err(ctx.err("frames", "expected frames or end_time")),
         (Some(_), Some(_)) => return Err(ctx.err("end_time", "give frames or end_time, not both")),
     };
+    let (start_frame, preroll_frames) = frame_range(ctx, &spec, frame_time)?;
     let gravity = finite3(ctx, "gravity", spec.gravity)?;
     let wind = match &spec.wind {
         Some(w) => Some(Wind {
@@ -139,6 +140,8 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
         frame_time,
         steps_per_frame,
         frames,
+        start_frame,
+        preroll_frames,
         gravity,
         wind,
         cloths: Vec::new(),
@@ -168,6 +171,29 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
         scene.collision.self_collision = !scene.obstacles.is_empty();
     }
     Ok(scene)
+}
+
+/// `start_frame` (an integer in 0..=100000000) and `preroll` (seconds ≥ 0, a whole number of
+/// frames) as (start frame, preroll frames).
+fn frame_range(ctx: &Ctx, spec: &SceneSpec, frame_time: f64) -> Res<(usize, usize)> {
+    let start = match spec.start_frame {
+        None => 0,
+        Some(n) if (0..=100_000_000).contains(&n) => n as usize,
+        Some(n) => return Err(ctx.err("start_frame", format!("expected an integer in 0..=100000000, got {n}"))),
+    };
+    let preroll = match spec.preroll {
+        None => 0,
+        Some(p) => {
+            let p = non_negative(ctx, "preroll", p)?;
+            let n = p / frame_time;
+            if (n - n.round()).abs() > 1e-6 * n.max(1.0) || n > 1e6 {
+                let msg = format!("expected a whole number of frames of {frame_time} s (seconds, ≥ 0), got {p}");
+                return Err(ctx.err("preroll", msg));
+            }
+            n.round() as usize
+        }
+    };
+    Ok((start, preroll))
 }
 
 fn collision_params(ctx: &Ctx, spec: Option<&CollisionSpec>) -> Res<CollisionParams> {
@@ -287,13 +313,16 @@ fn mesh_file(ctx: &Ctx, field: &str, rel: &str) -> Res<PathBuf> {
     }
 }
 
-/// A single cloth's mesh in its own node numbering.
-fn cloth_mesh(ctx: &Ctx, path: &str, cs: &ClothSpec) -> Res<Mesh> {
+/// A single cloth's mesh in its own node numbering, and the material metres per unit of its
+/// input's texture coordinates (`uv_scale` for an OBJ with `vt`, else 1: its material
+/// coordinates are then lengths already).
+fn cloth_mesh(ctx: &Ctx, path: &str, cs: &ClothSpec) -> Res<(Mesh, f64)> {
     match (&cs.mesh, &cs.rectangle) {
         (Some(file), None) => {
             let full = mesh_file(ctx, &format!("{path}.mesh"), file)?;
             let data = read_obj(&full).map_err(|msg| InputError { file: full.clone(), location: None, msg })?;
-            mesh_from_obj(&full, &data, cs.uv_scale)
+            let unit = if data.triangles.first().is_some_and(|t| t[0].vt.is_some()) { cs.uv_scale } else { 1.0 };
+            Ok((mesh_from_obj(&full, &data, cs.uv_scale)?, unit))
         }
         (None, Some(r)) => {
             let w = positive(ctx, &format!("{path}.rectangle.width"), r.width)?;
@@ -305,7 +334,7 @@ fn cloth_mesh(ctx: &Ctx, path: &str, cs: &ClothSpec) -> Res<Mesh> {
                     format!("expected two integers in 1..=4096, got [{nx}, {ny}]"),
                 ));
             }
-            rectangle(w, h, nx as usize, ny as usize).map_err(|e| ctx.err(path, e.to_string()))
+            rectangle(w, h, nx as usize, ny as usize).map(|m| (m, 1.0)).map_err(|e| ctx.err(path, e.to_string()))
         }
         _ => Err(ctx.err(path, "expected exactly one of \"mesh\" (OBJ file) or \"rectangle\"")),
     }
@@ -332,7 +361,8 @@ fn add_cloth(ctx: &Ctx, scene: &mut Scene, c: usize, cs: &ClothSpec) -> Res<()> 
     };
     let xf = transform(ctx, &format!("{path}.transform"), &cs.transform)?;
     let velocity = finite3(ctx, &format!("{path}.velocity"), cs.velocity)?;
-    let mut local = cloth_mesh(ctx, &path, cs)?;
+    let (mut local, unit) = cloth_mesh(ctx, &path, cs)?;
+    let uv_unit = unit * xf.scale;
     // ARCSim: a cloth's scale also scales its material coordinates.
     for v in &mut local.verts {
         v.u *= xf.scale;
@@ -377,7 +407,7 @@ fn add_cloth(ctx: &Ctx, scene: &mut Scene, c: usize, cs: &ClothSpec) -> Res<()> 
         });
     }
     let remesh = cs.remesh.as_ref().map(|r| remesh_params(ctx, &format!("{path}.remesh"), r)).transpose()?;
-    scene.cloths.push(Cloth { name, material: scene.materials.len(), remesh, flat_rest });
+    scene.cloths.push(Cloth { name, material: scene.materials.len(), remesh, flat_rest, uv_unit });
     scene.materials.push(material);
     Ok(())
 }
@@ -581,16 +611,58 @@ fn orient_faces(mesh: &mut Mesh) -> Result<(), (usize, String)> {
     Ok(())
 }
 
-/// Substitutes the frame number for the one printf-style `%d` / `%0Nd` in `pattern`.
+/// Substitutes the frame number for the one frame token in `pattern`: printf's `%d` / `%0Nd`,
+/// Houdini's `$F` / `$FN` (zero-padded to N digits), or a run of N `#` (zero-padded to N).
 pub(super) fn format_frame(pattern: &str, n: i64) -> Result<String, String> {
-    let bad = || format!("expected one %d or %0Nd (e.g. \"body_%04d.obj\") in \"{pattern}\"");
-    let start = pattern.find('%').ok_or_else(bad)?;
-    let rest = &pattern[start + 1..];
-    let digits = rest.find(|c: char| !c.is_ascii_digit()).ok_or_else(bad)?;
-    if !rest[digits..].starts_with('d') || rest[digits + 1..].contains('%') {
+    let bad =
+        || format!("expected one frame number token, %04d, $F4 or #### (e.g. \"body_%04d.obj\"), in \"{pattern}\"");
+    let tokens = [pattern.find('%'), pattern.find("$F"), pattern.find('#')];
+    let (start, len, width, zero) = match tokens {
+        [Some(start), None, None] => {
+            let rest = &pattern[start + 1..];
+            let digits = rest.find(|c: char| !c.is_ascii_digit()).ok_or_else(bad)?;
+            if !rest[digits..].starts_with('d') {
+                return Err(bad());
+            }
+            let width: usize = if digits == 0 { 0 } else { rest[..digits].parse().map_err(|_| bad())? };
+            (start, digits + 2, width, rest.starts_with('0'))
+        }
+        [None, Some(start), None] => {
+            let rest = &pattern[start + 2..];
+            let digits = rest.find(|c: char| !c.is_ascii_digit()).unwrap_or(rest.len());
+            let width: usize = if digits == 0 { 0 } else { rest[..digits].parse().map_err(|_| bad())? };
+            (start, digits + 2, width, true)
+        }
+        [None, None, Some(start)] => {
+            let hashes = pattern[start..].find(|c: char| c != '#').unwrap_or(pattern.len() - start);
+            (start, hashes, hashes, true)
+        }
+        _ => return Err(bad()),
+    };
+    let tail = &pattern[start + len..];
+    if tail.contains(['%', '#']) || tail.contains("$F") || width > 20 {
         return Err(bad());
     }
-    let width: usize = if digits == 0 { 0 } else { rest[..digits].parse().map_err(|_| bad())? };
-    let number = if rest.starts_with('0') { format!("{n:0width$}") } else { format!("{n:width$}") };
-    Ok(format!("{}{number}{}", &pattern[..start], &rest[digits + 1..]))
+    let number = if zero { format!("{n:0width$}") } else { format!("{n:width$}") };
+    Ok(format!("{}{number}{tail}", &pattern[..start]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::format_frame;
+
+    #[test]
+    fn frame_tokens_of_printf_houdini_and_hashes() {
+        for pattern in ["body_%04d.obj", "body_$F4.obj", "body_####.obj"] {
+            assert_eq!(format_frame(pattern, 7).unwrap(), "body_0007.obj", "{pattern}");
+            assert_eq!(format_frame(pattern, 12345).unwrap(), "body_12345.obj", "{pattern}");
+        }
+        assert_eq!(format_frame("b%d.obj", 7).unwrap(), "b7.obj");
+        assert_eq!(format_frame("b$F.obj", 7).unwrap(), "b7.obj");
+        assert_eq!(format_frame("b#.obj", 7).unwrap(), "b7.obj");
+        assert_eq!(format_frame("b%3d.obj", 7).unwrap(), "b  7.obj");
+        for bad in ["body.obj", "b%04d_%d.obj", "b$F4_####.obj", "b%s.obj", "b##_#.obj", "b%04.obj"] {
+            assert!(format_frame(bad, 1).is_err(), "{bad}");
+        }
+    }
 }

@@ -1,0 +1,260 @@
+//! What a run writes, frame by frame: OBJ frames (and exported obstacles), USD samples, stats,
+//! checkpoints; and the USD layer assembled from the samples when the run stops.
+//!
+//! Frames are counted two ways. The loop counts frames simulated since the run's start, preroll
+//! included (`k`, what checkpoints and `SimState::frame` count); written frames are numbered
+//! from the scene's `start_frame` (`Scene::frame_number`), in file names, stats.json and USD
+//! time codes. Preroll frames are simulated and not written.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use crate::io::obj::{frame_obj, obstacle_obj, ClothOut};
+use crate::io::stats::{CollisionFrameStats, FrameStats, RemeshFrameStats, RunStats};
+use crate::io::usd::{self, ObstacleFrame, StageInfo};
+use crate::io::{write_atomic, write_atomic_with, OutputFormat};
+
+use super::checkpoint::{self, RunRecord};
+use super::progress::{Progress, Reporter};
+use super::timers::Stage;
+use super::{file_safe, io_err, RunError, Simulation};
+
+/// The USD layer of a run, in its output directory.
+pub const USD_FILE: &str = "cloth.usda";
+/// The folder of the per-frame USD samples the layer is assembled from.
+pub const USD_SAMPLES: &str = usd::SAMPLES_DIR;
+
+/// Where and how a run writes.
+pub(super) struct Output<'a> {
+    pub dir: &'a Path,
+    pub cloths: Vec<ClothOut>,
+    pub digits: usize,
+    pub export_obstacles: bool,
+    pub format: OutputFormat,
+    pub obj_velocities: bool,
+    /// Present when checkpointing.
+    pub record: Option<RunRecord>,
+    pub adaptive: bool,
+}
+
+/// The samples file of frame `number` in `dir`.
+pub fn usd_samples_path(dir: &Path, number: usize, digits: usize) -> PathBuf {
+    dir.join(USD_SAMPLES).join(format!("frame_{number:0digits$}.txt"))
+}
+
+impl Output<'_> {
+    fn frame_path(&self, number: usize) -> PathBuf {
+        self.dir.join(format!("frame_{number:0w$}.obj", w = self.digits))
+    }
+
+    /// Readies the directory: the samples folder when writing USD.
+    pub fn prepare(&self) -> Result<(), RunError> {
+        std::fs::create_dir_all(self.dir).map_err(io_err(self.dir))?;
+        if self.format.usd() {
+            let samples = self.dir.join(USD_SAMPLES);
+            std::fs::create_dir_all(&samples).map_err(io_err(&samples))?;
+        }
+        Ok(())
+    }
+
+    /// Writes frame `number`: the OBJ (and obstacles) and the USD samples, as asked.
+    fn write_frame(&self, sim: &mut Simulation, number: usize) -> Result<(), RunError> {
+        let clock = Instant::now();
+        if self.format.obj() {
+            let path = self.frame_path(number);
+            let text = frame_obj(&sim.state.mesh, &self.cloths, self.obj_velocities);
+            write_atomic(&path, text.as_bytes()).map_err(io_err(&path))?;
+        }
+        let mut obstacles = Vec::new();
+        if self.export_obstacles {
+            if let Some(world) = &sim.ws.collisions {
+                for (body, obstacle) in world.bodies.iter().zip(&sim.scene.obstacles) {
+                    let positions = body.positions_at(sim.state.time);
+                    if self.format.obj() {
+                        let name = format!("obstacle_{}_{number:0w$}.obj", file_safe(&obstacle.name), w = self.digits);
+                        let path = self.dir.join(name);
+                        let text = obstacle_obj(&positions, body.triangles());
+                        write_atomic(&path, text.as_bytes()).map_err(io_err(&path))?;
+                    }
+                    obstacles.push(ObstacleFrame { name: &obstacle.name, positions, triangles: body.triangles() });
+                }
+            }
+        }
+        if self.format.usd() {
+            let path = usd_samples_path(self.dir, number, self.digits);
+            let text = usd::frame_samples(&sim.state.mesh, &self.cloths, &obstacles);
+            write_atomic(&path, text.as_bytes()).map_err(io_err(&path))?;
+        }
+        sim.ws.timers.since(Stage::Output, clock);
+        Ok(())
+    }
+
+    /// Assembles the USD layer of the frames written up to frame `k` of the run (nothing when
+    /// the run is not writing USD or has written no frame yet).
+    fn write_usd(&self, sim: &Simulation, k: usize) -> Result<(), RunError> {
+        let (scene, dir) = (&sim.scene, self.dir);
+        let Some(end) = scene.frame_number(k).filter(|_| self.format.usd()) else { return Ok(()) };
+        let frames: Vec<(usize, PathBuf)> =
+            (scene.start_frame..=end).map(|n| (n, usd_samples_path(dir, n, self.digits))).collect();
+        let info = StageInfo { scene: scene.name.clone(), fps: 1.0 / scene.frame_time, start: scene.start_frame, end };
+        let path = dir.join(USD_FILE);
+        write_atomic_with(&path, |f| usd::assemble(f, &info, &frames)).map_err(|e| match e {
+            usd::AssembleError::Write(source) => RunError::Io { path: path.clone(), source },
+            other => RunError::Output(other.to_string()),
+        })
+    }
+
+    fn write_stats(&self, stats: &RunStats) -> Result<(), RunError> {
+        let path = self.dir.join("stats.json");
+        let json =
+            serde_json::to_vec_pretty(stats).map_err(|e| RunError::Io { path: path.clone(), source: e.into() })?;
+        write_atomic(&path, &json).map_err(io_err(&path))
+    }
+
+    /// Writes the checkpoint of frame `k` when due (every `every` frames and at the last) or
+    /// `now`, then removes all but it and the one before it. Returns its path when written.
+    fn checkpoint(
+        &self,
+        sim: &mut Simulation,
+        stats: &RunStats,
+        k: usize,
+        last: usize,
+        now: bool,
+    ) -> Result<Option<PathBuf>, RunError> {
+        let Some(record) = &self.record else { return Ok(None) };
+        let due = record.every > 0 && k > 0 && (k.is_multiple_of(record.every) || k == last);
+        if !due && !now {
+            return Ok(None);
+        }
+        let clock = Instant::now();
+        let path = checkpoint::checkpoint_path(self.dir, k, self.digits);
+        write_atomic(&path, &checkpoint::encode(record, &sim.state, stats)).map_err(io_err(&path))?;
+        let old = checkpoint::list(self.dir).map_err(io_err(self.dir))?;
+        for (_, p) in old.iter().filter(|(j, _)| *j < k).skip(1) {
+            let _ = std::fs::remove_file(p);
+        }
+        sim.ws.timers.since(Stage::Checkpoint, clock);
+        Ok(Some(path))
+    }
+
+    /// Frames `first..=last` of the run (counted from its start, preroll included; frame 0 is
+    /// the initial state, not simulated); `wall_before` is the wall time of earlier sessions.
+    pub fn frames(
+        &self,
+        sim: &mut Simulation,
+        mut stats: RunStats,
+        first: usize,
+        last: usize,
+        progress: &Progress,
+        wall_before: f64,
+    ) -> Result<RunStats, RunError> {
+        let started = Instant::now();
+        let mut report = Reporter::start(progress, &sim.scene.name, first, last);
+        (report.start_frame, report.preroll) = (sim.scene.start_frame, sim.scene.preroll_frames);
+        for k in first..=last {
+            let clock = Instant::now();
+            if k > 0 {
+                if let Err(e) = sim.advance_frame() {
+                    // The frames written so far stay; stats.json says why the run stopped.
+                    let at = sim.scene.frame_number(k).map_or(format!("preroll frame {k}"), |n| format!("frame {n}"));
+                    stats.error = Some(format!("{at}: {e}"));
+                    stats.total_wall_s = wall_before + started.elapsed().as_secs_f64();
+                    self.write_stats(&stats)?;
+                    self.write_usd(sim, k - 1)?;
+                    return Err(e.into());
+                }
+            }
+            let number = sim.scene.frame_number(k);
+            if let Some(n) = number {
+                self.write_frame(sim, n)?;
+            }
+            let mut fs = self.frame_stats(sim, number.unwrap_or(0));
+            fs.wall_s = clock.elapsed().as_secs_f64();
+            stats.retries += fs.retries;
+            if k > 0 && (stats.min_step == 0.0 || fs.min_step < stats.min_step) {
+                stats.min_step = fs.min_step;
+            }
+            // A preroll frame's counters are counted in the run's totals, not listed.
+            if number.is_some() {
+                stats.frames.push(fs);
+            }
+            for stage in sim.ws.timers.ran() {
+                if !stats.stages.iter().any(|s| s == stage) {
+                    stats.stages.push(stage.to_string());
+                }
+            }
+            stats.total_wall_s = wall_before + started.elapsed().as_secs_f64();
+            self.write_stats(&stats)?;
+            self.checkpoint(sim, &stats, k, last, false)?;
+            report.frame(k, fs_wall(&stats), sim.state.mesh.faces.len());
+            if k < last && super::interrupt::requested() {
+                report.finish();
+                return self.interrupted(sim, stats, k, last);
+            }
+        }
+        report.finish();
+        self.write_usd(sim, last)?;
+        Ok(stats)
+    }
+
+    /// The measurements and counters of the frame just simulated, as frame `number`.
+    fn frame_stats(&self, sim: &mut Simulation, number: usize) -> FrameStats {
+        let mut fs = sim.measure(number);
+        if self.adaptive {
+            let r = std::mem::take(&mut sim.ws.remesh_stats);
+            fs.remesh = Some(RemeshFrameStats { splits: r.splits, flips: r.flips, collapses: r.collapses });
+        }
+        if sim.ws.collisions.is_some() {
+            let clock = Instant::now();
+            let c = std::mem::take(&mut sim.ws.counters);
+            fs.collision = Some(CollisionFrameStats {
+                contacts: c.contacts,
+                impacts: c.impacts,
+                impact_zones: c.impact_zones,
+                ccd_iterations: c.ccd_iterations,
+                ccd_cap_hits: c.cap_hits,
+                failed_zones: c.failed_zones,
+                penetrations: sim.penetrations(),
+                sticking: c.sticking,
+                sliding: c.sliding,
+                friction_resolves: c.friction_resolves,
+                friction_refactors: c.friction_refactors,
+                friction_unconverged: c.friction_unconverged,
+            });
+            sim.ws.timers.since(Stage::PenetrationCheck, clock);
+        }
+        let faults = std::mem::take(&mut sim.ws.faults);
+        fs.steps = faults.steps;
+        fs.retries = faults.retries;
+        fs.min_step = faults.min_step;
+        fs.faults = faults.kinds;
+        fs.stage_s = sim.ws.timers.take();
+        fs
+    }
+
+    /// Stops the run after frame `k` (a signal): its checkpoint, then stats.json saying so,
+    /// then the USD layer of the frames so far.
+    fn interrupted(
+        &self,
+        sim: &mut Simulation,
+        mut stats: RunStats,
+        k: usize,
+        last: usize,
+    ) -> Result<RunStats, RunError> {
+        let checkpoint = self.checkpoint(sim, &stats, k, last, true)?;
+        let scene = &sim.scene;
+        let at = match (scene.frame_number(k), scene.frame_number(last)) {
+            (Some(n), Some(end)) => format!("frame {n} of {}..={end}", scene.start_frame),
+            _ => format!("preroll frame {k} of {}", scene.preroll_frames),
+        };
+        stats.error = Some(format!("interrupted after {at} (SIGTERM or SIGINT)"));
+        self.write_stats(&stats)?;
+        self.write_usd(sim, k)?;
+        Err(RunError::Interrupted { dir: self.dir.to_path_buf(), at, checkpoint })
+    }
+}
+
+/// The wall time of the last frame recorded.
+fn fs_wall(stats: &RunStats) -> f64 {
+    stats.frames.last().map_or(0.0, |f| f.wall_s)
+}
