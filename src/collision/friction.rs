@@ -41,7 +41,12 @@ use crate::math::{Mat3, Real, Vec3};
 pub const STICK_STIFFNESS: Real = 1e3;
 /// Solves per step at most (the first included); the last one is taken even if some contact
 /// still disagrees with its mode (counted).
-pub const MAX_SOLVES: usize = 8;
+pub const MAX_SOLVES: usize = 6;
+/// Refactorisations per step for mode changes at most. Beyond them modes stay as they are
+/// within the step (the sliding forces still follow) and the changes wait for the next step's
+/// first guess: with thousands of contacts some contact changes at every solve, and each
+/// refactorisation costs as much as the step's first.
+pub const MAX_REFACTORS: usize = 1;
 /// A sliding force that moved (in direction or size) by more than this fraction of its size is
 /// updated: Coulomb's law holds to 2% of the friction force (about 1° in direction).
 const SLIDE_TOLERANCE: Real = 0.02;
@@ -92,6 +97,8 @@ pub struct FrictionContact {
     /// The kinetic force of an uncoupled contact is at most m_eff |v_t(start)| / h.
     cap: Real,
     pub mode: Mode,
+    /// Whether Coulomb's law, at the last update, says it sticks.
+    next_stick: bool,
 }
 
 /// The state friction is evaluated against: start positions and velocities of the cloth,
@@ -185,6 +192,8 @@ pub enum Change {
 /// The contacts of one step with their modes.
 pub struct Friction {
     pub contacts: Vec<FrictionContact>,
+    /// Contacts whose mode change the last update did not apply.
+    pub pending: usize,
 }
 
 impl Friction {
@@ -225,10 +234,11 @@ impl Friction {
                     true => Mode::Stick,
                     false => Mode::Slide(frame.slide(&c, vt, (c.mu * fn0).min(c.cap))),
                 };
+                c.next_stick = c.mode == Mode::Stick;
                 Some(c)
             })
             .collect::<Vec<FrictionContact>>();
-        Friction { contacts }
+        Friction { contacts, pending: 0 }
     }
 
     pub fn is_empty(&self) -> bool {
@@ -255,31 +265,45 @@ impl Friction {
     }
 
     /// Re-evaluates every contact's mode at the solved velocities `v` (module doc); `first` for
-    /// the first update of a step (no hysteresis).
-    pub fn update(&mut self, frame: &FrictionFrame, v: &[Vec3], first: bool) -> Change {
+    /// the first update of a step (no hysteresis). With `modes` false, mode changes are not
+    /// applied (the matrix stays): they are counted in `pending` and become the next step's
+    /// first guess (`stuck`).
+    pub fn update(&mut self, frame: &FrictionFrame, v: &[Vec3], first: bool, modes: bool) -> Change {
         let slack = if first { 0.0 } else { HYSTERESIS };
         let mut change = Change::None;
+        self.pending = 0;
         for c in &mut self.contacts {
             let (fn1, vt) = frame.kinematics(c, v);
             let (bound, speed) = ((c.mu * fn1).min(c.cap), vt.norm());
+            c.next_stick = c.mode == Mode::Stick;
             match c.mode {
                 Mode::Stick => {
                     if frame.stick_coefficient(c) * speed > bound * (1.0 + slack.max(SLIDE_TOLERANCE)) {
-                        c.mode = Mode::Slide(frame.slide(c, vt, bound));
-                        change = Change::Modes;
+                        c.next_stick = false;
+                        match modes {
+                            true => {
+                                c.mode = Mode::Slide(frame.slide(c, vt, bound));
+                                change = Change::Modes;
+                            }
+                            false => self.pending += 1,
+                        }
                     }
                 }
                 Mode::Slide(s) => {
                     // Sticks when reversed by more than the slack, by no more than the friction
-                    // force alone changes it in a step (friction would have stopped it) …
-                    // Or slides so slowly that the stick damper would hold it within the bound.
+                    // force alone changes it in a step (friction would have stopped it), or when
+                    // sliding so slowly that the stick damper would hold it within the bound.
                     let (along, reach) = (vt.dot(&s.t), s.force * frame.h / c.m_eff);
                     let reversed = along <= -slack * reach && -along <= reach;
                     let creeping = frame.stick_coefficient(c) * speed < bound * (1.0 - slack);
                     if c.coupled && bound > 0.0 && (reversed || creeping) {
-                        c.mode = Mode::Stick;
-                        change = Change::Modes;
-                        continue;
+                        c.next_stick = true;
+                        if modes {
+                            c.mode = Mode::Stick;
+                            change = Change::Modes;
+                            continue;
+                        }
+                        self.pending += 1;
                     }
                     // The force follows when it moved by more than the tolerance of its size.
                     let t1 = if speed > 0.0 && c.coupled { vt / speed } else { s.t };
@@ -316,8 +340,7 @@ impl Friction {
 
     /// The sticking contacts' participants, sorted (the next step's first guess).
     pub fn stuck(&self) -> Vec<[usize; 4]> {
-        let mut stuck: Vec<[usize; 4]> =
-            self.contacts.iter().filter(|c| c.mode == Mode::Stick).map(|c| c.nodes).collect();
+        let mut stuck: Vec<[usize; 4]> = self.contacts.iter().filter(|c| c.next_stick).map(|c| c.nodes).collect();
         stuck.sort_unstable();
         stuck.dedup();
         stuck
@@ -345,6 +368,7 @@ impl FrictionContact {
             coupled: true,
             cap: 0.0,
             mode: Mode::Stick,
+            next_stick: false,
         }
     }
 }
@@ -425,16 +449,16 @@ mod tests {
         };
         assert_eq!(f.contacts[0].mode, Mode::Stick);
         // c = 1e5: a residual slip of 1e-6 m/s needs 0.1 N ≤ μ f_n = 0.5 (f_n at x₀ + h v).
-        assert_eq!(f.update(&frame, &[Vec3::new(1e-6, 0.0, 0.0)], true), Change::None);
+        assert_eq!(f.update(&frame, &[Vec3::new(1e-6, 0.0, 0.0)], true, true), Change::None);
         // 1e-5 m/s needs 1 N > 0.5: slides along +x with 0.5 N.
-        assert_eq!(f.update(&frame, &[Vec3::new(1e-5, 0.0, 0.0)], true), Change::Modes);
+        assert_eq!(f.update(&frame, &[Vec3::new(1e-5, 0.0, 0.0)], true, true), Change::Modes);
         assert!(matches!(f.contacts[0].mode, Mode::Slide(s) if s.t == Vec3::x() && s.force == 0.5));
         // Same direction and force: converged.
-        assert_eq!(f.update(&frame, &[Vec3::new(2e-5, 0.0, 0.0)], true), Change::None);
+        assert_eq!(f.update(&frame, &[Vec3::new(2e-5, 0.0, 0.0)], true, true), Change::None);
         // Turned: the force follows (right-hand side only).
-        assert_eq!(f.update(&frame, &[Vec3::new(2e-5, 2e-5, 0.0)], true), Change::Rhs);
+        assert_eq!(f.update(&frame, &[Vec3::new(2e-5, 2e-5, 0.0)], true, true), Change::Rhs);
         // Reversed against the force: sticks.
-        assert_eq!(f.update(&frame, &[Vec3::new(-1e-5, -1e-5, 0.0)], true), Change::Modes);
+        assert_eq!(f.update(&frame, &[Vec3::new(-1e-5, -1e-5, 0.0)], true, true), Change::Modes);
         assert_eq!(f.contacts[0].mode, Mode::Stick);
     }
 

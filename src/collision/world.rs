@@ -40,7 +40,8 @@ pub struct CollisionCounters {
     /// Solves and factorisations beyond the first that friction's mode changes took.
     pub friction_resolves: usize,
     pub friction_refactors: usize,
-    /// Steps whose friction modes had not settled after `friction::MAX_SOLVES` solves.
+    /// Steps ending with friction contacts not in the mode Coulomb's law gives them
+    /// (`friction::MAX_REFACTORS`, `friction::MAX_SOLVES`).
     pub friction_unconverged: usize,
 }
 

@@ -69,7 +69,9 @@ pub struct CollisionFrameStats {
     pub friction_resolves: usize,
     #[serde(default)]
     pub friction_refactors: usize,
-    /// Steps whose friction modes had not settled after the solve limit.
+    /// Steps ending with friction contacts not in the mode Coulomb's law gives them (mode changes
+    /// beyond the refactorisation limit wait for the next step; sliding forces beyond the solve
+    /// limit keep their last value).
     #[serde(default)]
     pub friction_unconverged: usize,
 }

@@ -181,7 +181,7 @@ impl Simulation {
                     stuck,
                 )
             }
-            _ => Friction { contacts: Vec::new() },
+            _ => Friction { contacts: Vec::new(), pending: 0 },
         };
         let mut friction_s = clock.elapsed().as_secs_f64();
         let input = StepInput {
@@ -216,10 +216,14 @@ impl Simulation {
                 break v;
             }
             let clock = Instant::now();
-            let change = friction.update(&frame, &v, timing.solves == 1);
+            let modes = timing.factorisations <= friction::MAX_REFACTORS;
+            let change = friction.update(&frame, &v, timing.solves == 1, modes);
             friction_s += clock.elapsed().as_secs_f64();
             match change {
-                Change::None => break v,
+                Change::None => {
+                    converged = friction.pending == 0;
+                    break v;
+                }
                 Change::Rhs => refactor = false,
                 Change::Modes => refactor = true,
             }
