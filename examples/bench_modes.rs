@@ -15,7 +15,7 @@ fn simulate(scene_path: &Path, mode: RemeshMode, frames: usize) -> RunStats {
     let mut scene = scene::load_file(scene_path).unwrap_or_else(|e| panic!("{e}"));
     assert!(scene.set_remesh_mode(mode) > 0, "the scene has no remesh block");
     let out_dir = std::env::temp_dir().join(format!("viewcloth_bench_modes_{mode:?}"));
-    let opts = RunOptions { out_dir, frames: Some(frames), quiet: true, export_obstacles: false };
+    let opts = RunOptions { out_dir, frames: Some(frames), quiet: true, export_obstacles: false, jitter: None };
     run(scene, &opts).unwrap_or_else(|e| panic!("{e}"))
 }
 

@@ -19,7 +19,13 @@ fn simulate(scene_path: &Path, camera: &Camera, mode: RemeshMode, frames: usize)
     scene.camera = Some(camera.clone());
     assert!(scene.set_remesh_mode(mode) > 0, "the scene has no remesh block");
     let out_dir = std::env::temp_dir().join(format!("viewcloth_bench_view_{mode:?}"));
-    let opts = RunOptions { out_dir: out_dir.clone(), frames: Some(frames), quiet: true, export_obstacles: false };
+    let opts = RunOptions {
+        out_dir: out_dir.clone(),
+        frames: Some(frames),
+        quiet: true,
+        export_obstacles: false,
+        jitter: None,
+    };
     (run(scene, &opts).unwrap_or_else(|e| panic!("{e}")), out_dir)
 }
 

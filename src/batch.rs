@@ -232,7 +232,7 @@ fn run_one(shot: Shot, threads: usize, progress: &Progress) -> ShotResult {
     if plan == Plan::Skip {
         return result("skipped", last, None);
     }
-    let opts = RunOptions { out_dir: out.clone(), frames, quiet: true, export_obstacles: false };
+    let opts = RunOptions { out_dir: out.clone(), frames, quiet: true, export_obstacles: false, jitter: None };
     let ck = CheckpointOptions {
         every: checkpoint_every,
         scene_file: shot.scene_file.clone(),

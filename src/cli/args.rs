@@ -92,6 +92,21 @@ pub struct SimulateArgs {
     /// Base directory for an ARCSim conf's paths (default: the conf's grand-parent directory).
     #[arg(long)]
     pub base: Option<PathBuf>,
+    /// Move every initial cloth node by --jitter metres in a direction drawn from seed N
+    /// (independent per node; the same seed gives the same run). Recorded in stats.json.
+    #[arg(long, value_name = "N")]
+    pub jitter_seed: Option<u64>,
+    /// Size of the --jitter-seed displacement, metres (default 1e-6: 1 µm).
+    #[arg(long, value_name = "M", requires = "jitter_seed", value_parser = parse_jitter)]
+    pub jitter: Option<f64>,
+}
+
+/// `--jitter M`: a finite length in metres, 0 ≤ M ≤ 0.01.
+fn parse_jitter(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(m) if (0.0..=0.01).contains(&m) => Ok(m),
+        _ => Err(format!("expected a length in metres from 0 to 0.01, got \"{text}\"")),
+    }
 }
 
 #[derive(clap::Args)]

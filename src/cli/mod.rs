@@ -15,7 +15,9 @@ use crate::scene::{self, RemeshMode};
 use crate::shot::{self, ShotError, ShotRequest};
 use crate::sim::progress::{Progress, ProgressMode};
 use crate::sim::SimError;
-use crate::sim::{claim_output, interrupt, resume, run_shot, CheckpointOptions, ResumeOptions, RunError, RunOptions};
+use crate::sim::{
+    claim_output, interrupt, resume, run_shot, CheckpointOptions, Jitter, ResumeOptions, RunError, RunOptions,
+};
 use args::{BatchArgs, CompareArgs, RenderArgs, ResumeArgs, SimulateArgs};
 
 /// Exit code for bad input (scene, mesh, command line).
@@ -129,7 +131,10 @@ pub fn simulate(args: SimulateArgs) -> Result<(), CliError> {
         camera,
         checkpoint_every,
         base,
+        jitter_seed,
+        jitter,
     } = args;
+    let jitter = jitter_seed.map(|seed| Jitter { seed, amplitude: jitter.unwrap_or(Jitter::AMPLITUDE) });
     set_threads(threads)?;
     // clap admits only RemeshMode::NAMES.
     let mode = mode.as_deref().and_then(RemeshMode::parse);
@@ -139,7 +144,8 @@ pub fn simulate(args: SimulateArgs) -> Result<(), CliError> {
         print_warnings(path, &shot.warnings);
     }
     let out_dir = out.unwrap_or_else(|| Path::new("out").join(&shot.stem));
-    let opts = RunOptions { out_dir: out_dir.clone(), frames: frames.map(|f| f as usize), quiet, export_obstacles };
+    let opts =
+        RunOptions { out_dir: out_dir.clone(), frames: frames.map(|f| f as usize), quiet, export_obstacles, jitter };
     // Without --checkpoint-every, a checkpoint is written only when a signal stops the run.
     let ck = CheckpointOptions {
         every: checkpoint_every.unwrap_or(0) as usize,

@@ -10,6 +10,7 @@ use crate::error::InputError;
 use crate::io::obj::{frame_obj, obstacle_obj};
 use crate::io::stats::{CollisionFrameStats, RemeshFrameStats, RunStats};
 use crate::io::write_atomic;
+use crate::math::Real;
 use crate::scene::{RemeshMode, Scene};
 use crate::shot::{self, ShotRequest};
 
@@ -25,6 +26,21 @@ pub struct RunOptions {
     pub quiet: bool,
     /// Also write each obstacle's world-space mesh per frame (`obstacle_<name>_NNNN.obj`).
     pub export_obstacles: bool,
+    /// Move the initial cloth positions by a seeded jitter (`Scene::jitter_positions`).
+    pub jitter: Option<Jitter>,
+}
+
+/// A seeded jitter of the initial cloth positions: every node moved by `amplitude` (m) in its
+/// own direction drawn from `seed`. Recorded in stats.json (`jitter_seed`, `jitter_m`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Jitter {
+    pub seed: u64,
+    pub amplitude: Real,
+}
+
+impl Jitter {
+    /// The default amplitude of `simulate --jitter-seed` (m).
+    pub const AMPLITUDE: Real = 1e-6;
 }
 
 /// Checkpointing of a run: every `every` frames (and at the last; `every` 0: only when the run
@@ -88,7 +104,7 @@ pub fn run_with_checkpoints(
 
 /// `run_with_checkpoints`, reporting its frames to `progress` (`opts.quiet` is not looked at).
 pub fn run_shot(
-    scene: Scene,
+    mut scene: Scene,
     opts: &RunOptions,
     ck: Option<&CheckpointOptions>,
     progress: &Progress,
@@ -105,6 +121,11 @@ pub fn run_shot(
         export_obstacles: opts.export_obstacles,
         every: c.every,
     });
+    // After the fingerprint: `resume` reloads the scene as it is in its file, and the jittered
+    // positions live on in the checkpointed state.
+    if let Some(j) = &opts.jitter {
+        scene.jitter_positions(j.seed, j.amplitude);
+    }
     let names: Vec<String> = scene.cloths.iter().map(|c| c.name.clone()).collect();
     let mut sim = Simulation::new(scene)?;
     std::fs::create_dir_all(&opts.out_dir).map_err(io_err(&opts.out_dir))?;
@@ -117,7 +138,13 @@ pub fn run_shot(
     } else {
         "uniform"
     };
-    let stats = RunStats { scene: sim.scene.name.clone(), mode: mode.into(), ..Default::default() };
+    let stats = RunStats {
+        scene: sim.scene.name.clone(),
+        mode: mode.into(),
+        jitter_seed: opts.jitter.map(|j| j.seed),
+        jitter_m: opts.jitter.map(|j| j.amplitude),
+        ..Default::default()
+    };
     let out = Output { dir: &opts.out_dir, names, digits, export_obstacles: opts.export_obstacles, record, adaptive };
     out.frames(&mut sim, stats, 0, frames, progress, 0.0)
 }
@@ -379,6 +406,10 @@ impl Output<'_> {
                 });
                 sim.ws.timers.since(Stage::PenetrationCheck, clock);
             }
+            let check = Instant::now();
+            let crossings = sim.crossings();
+            (fs.crossings_self, fs.crossings_obstacle) = (crossings.cloth.len(), crossings.obstacle.len());
+            sim.ws.timers.since(Stage::CrossingCheck, check);
             let faults = std::mem::take(&mut sim.ws.faults);
             fs.steps = faults.steps;
             fs.retries = faults.retries;
