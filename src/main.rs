@@ -42,6 +42,7 @@ fn main() -> ExitCode {
         Command::Compare(args) => cli::compare_modes(args),
         Command::Render(args) => cli::render(args),
         Command::Batch(args) => cli::batch(args),
+        Command::Crossings(args) => cli::crossings(args),
         Command::Convert { conf, out, base } => cli::convert(&conf, &out, base.as_deref()),
     };
     match result {

@@ -39,6 +39,10 @@ pub enum Command {
     /// time; a failed shot does not stop the others. A rerun skips finished shots and resumes
     /// interrupted ones.
     Batch(BatchArgs),
+    /// Count the triangle pairs that cross in each frame of a run, from its files (frame_NNNN.obj
+    /// and, when exported, obstacle_<name>_NNNN.obj): cloth–cloth and cloth–obstacle, pairs
+    /// sharing a node skipped. Prints one line per frame; exits 1 if any pair crosses.
+    Crossings(CrossingsArgs),
     /// Convert an ARCSim conf into a viewcloth scene file.
     Convert {
         conf: PathBuf,
@@ -212,6 +216,19 @@ pub struct CompareArgs {
     /// (default: a bar on a terminal, lines otherwise; `none` with --quiet).
     #[arg(long, value_parser = ProgressMode::NAMES)]
     pub progress: Option<String>,
+}
+
+#[derive(clap::Args)]
+pub struct CrossingsArgs {
+    /// Output directory of a run.
+    #[arg(value_name = "RUN_DIR")]
+    pub dir: PathBuf,
+    /// Frames A..B, both included (default: every frame in the directory).
+    #[arg(long, value_name = "A..B")]
+    pub frames: Option<String>,
+    /// Only the closing line (and the frames with crossings).
+    #[arg(long)]
+    pub quiet: bool,
 }
 
 #[derive(clap::Args)]

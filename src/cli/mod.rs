@@ -8,9 +8,10 @@ pub mod args;
 use std::path::{Path, PathBuf};
 
 use crate::camera::Camera;
+use crate::collision::crossings::{find_crossings, Soup};
 use crate::compare::{compare, markdown, CompareOptions};
 use crate::error::InputError;
-use crate::render::{render_run, Colouring, RenderOptions};
+use crate::render::{render_run, run_dir, Colouring, RenderOptions, RunFiles};
 use crate::scene::{self, RemeshMode};
 use crate::shot::{self, ShotError, ShotRequest};
 use crate::sim::progress::{Progress, ProgressMode};
@@ -18,7 +19,7 @@ use crate::sim::SimError;
 use crate::sim::{
     claim_output, interrupt, resume, run_shot, CheckpointOptions, Jitter, ResumeOptions, RunError, RunOptions,
 };
-use args::{BatchArgs, CompareArgs, RenderArgs, ResumeArgs, SimulateArgs};
+use args::{BatchArgs, CompareArgs, CrossingsArgs, RenderArgs, ResumeArgs, SimulateArgs};
 
 /// Exit code for bad input (scene, mesh, command line).
 pub const EXIT_INPUT: u8 = 2;
@@ -263,6 +264,54 @@ pub fn render(args: RenderArgs) -> Result<(), CliError> {
     })?;
     println!("{n} images → {}", args.dir.join("view_*.png").display());
     Ok(())
+}
+
+/// `viewcloth crossings`: per frame, the crossing pairs counted from the run's files alone
+/// (`collision::crossings`, as the run counts them into stats.json), one tab-separated line
+/// each; an error when any frame has one.
+pub fn crossings(args: CrossingsArgs) -> Result<(), CliError> {
+    let dir = args.dir.as_path();
+    let mut frames = run_dir::frame_numbers(dir)?;
+    if let Some((a, b)) = args.frames.as_deref().map(parse_frames).transpose()? {
+        frames.retain(|f| (a..=b).contains(f));
+        if frames.is_empty() {
+            return Err(CliError::Input(format!("{}: no frames in {a}..{b}", dir.display())));
+        }
+    }
+    let (first, last) = (frames[0], frames[frames.len() - 1]);
+    let files = RunFiles::scan(dir, first, last)?;
+    if !args.quiet {
+        println!("frame\tcrossings_self\tcrossings_obstacle");
+    }
+    let mut bad = Vec::new();
+    for &f in &frames {
+        let m = files.load(f)?;
+        let (cloth, obstacles) = m.triangles.split_at(m.cloth_triangles);
+        let found = find_crossings(Soup { x: &m.positions, tris: cloth }, Soup { x: &m.positions, tris: obstacles });
+        let (s, o) = (found.cloth.len(), found.obstacle.len());
+        if s + o > 0 {
+            bad.push(f);
+        }
+        if !args.quiet || s + o > 0 {
+            println!("{f}\t{s}\t{o}");
+        }
+    }
+    let what = match files.has_obstacles() {
+        true => "cloth–cloth and cloth–obstacle",
+        false => "cloth–cloth only: the run exported no obstacles (simulate --export-obstacles)",
+    };
+    match bad.len() {
+        0 => {
+            println!("{}: {} frames, no crossings ({what})", dir.display(), frames.len());
+            Ok(())
+        }
+        n => Err(CliError::Run(format!(
+            "{}: {n} of {} frames have crossing triangle pairs (first: frame {}; {what})",
+            dir.display(),
+            frames.len(),
+            bad[0]
+        ))),
+    }
 }
 
 /// The shot `--shot N` or `--shot-from-env VAR` picks, checked against the list's length.
