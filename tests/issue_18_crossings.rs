@@ -255,6 +255,16 @@ fn jittered_repeats_differ_by_seed_and_repeat_by_seed() {
     assert_eq!(a.len(), 6);
     assert!(a.iter().zip(&b).all(|(x, y)| x != y), "seeds 1 and 2 gave an identical frame");
     assert!(a == a_again, "seed 1 twice gave different bytes");
+    // A jittered run resumed from its checkpoint continues as if uninterrupted.
+    let dir = root.join("seed_1_resumed");
+    let d = dir.to_str().unwrap();
+    let s = scene.to_str().unwrap();
+    let args = ["simulate", s, "--frames", "2", "--checkpoint-every", "2", "--jitter-seed", "1", "--out", d, "--quiet"];
+    assert!(viewcloth(&args).status.success());
+    let resumed = viewcloth(&["resume", d, "--frames", "5", "--quiet"]);
+    assert!(resumed.status.success(), "{}", String::from_utf8_lossy(&resumed.stderr));
+    assert!(frames_bytes(&dir) == a, "the resumed jittered run differs");
+    assert_eq!(read_stats(&dir).jitter_seed, Some(1));
     // Each node moves by the amplitude, 1 µm (nodes the initial refinement adds, by at most
     // that): frame 0 against the unjittered run's, within the files' nanometre precision.
     let dir = root.join("none");
