@@ -186,6 +186,13 @@ fn crossings_command_counts_hand_made_frames() {
         "{stderr}"
     );
     assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    let out = viewcloth(&["crossings", dir.to_str().unwrap(), "--quiet", "--pairs"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let pairs: Vec<&str> = stdout.lines().filter(|l| l.starts_with("pair\t")).collect();
+    assert_eq!(
+        pairs,
+        ["pair\t1\tself\t0\t1\t0.333333 0.333333 0.000000", "pair\t1\tobstacle\t0\t3\t0.333333 0.333333 0.000000"]
+    );
     let out = viewcloth(&["crossings", dir.to_str().unwrap(), "--frames", "0..0"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 }

@@ -229,6 +229,11 @@ pub struct CrossingsArgs {
     /// Only the closing line (and the frames with crossings).
     #[arg(long)]
     pub quiet: bool,
+    /// Also list each crossing pair: `pair`, the frame, `self` or `obstacle`, the two triangles
+    /// (0-based, in file order: cloth faces, then the obstacles' in name order) and a point of
+    /// the first (its centroid, m).
+    #[arg(long)]
+    pub pairs: bool,
 }
 
 #[derive(clap::Args)]

@@ -11,6 +11,7 @@ use crate::camera::Camera;
 use crate::collision::crossings::{find_crossings, Soup};
 use crate::compare::{compare, markdown, CompareOptions};
 use crate::error::InputError;
+use crate::math::Vec3;
 use crate::render::{render_run, run_dir, Colouring, RenderOptions, RunFiles};
 use crate::scene::{self, RemeshMode};
 use crate::shot::{self, ShotError, ShotRequest};
@@ -294,6 +295,15 @@ pub fn crossings(args: CrossingsArgs) -> Result<(), CliError> {
         }
         if !args.quiet || s + o > 0 {
             println!("{f}\t{s}\t{o}");
+        }
+        let found_pairs = found
+            .cloth
+            .iter()
+            .map(|p| ("self", p, 0))
+            .chain(found.obstacle.iter().map(|p| ("obstacle", p, cloth.len())));
+        for (kind, &(a, b), offset) in found_pairs.filter(|_| args.pairs) {
+            let c = cloth[a].iter().map(|&i| m.positions[i]).sum::<Vec3>() / 3.0;
+            println!("pair\t{f}\t{kind}\t{a}\t{}\t{:.6} {:.6} {:.6}", b + offset, c.x, c.y, c.z);
         }
     }
     let what = match files.has_obstacles() {
