@@ -8,7 +8,8 @@
 //! differ: one passes through the other. In general position that is "an edge of one passes
 //! through the interior of the other". Touching is not crossing: a vertex or an edge lying on
 //! the other triangle, two edges meeting, and coplanar triangles (touching or overlapping inside
-//! one plane: neither passes from one side of the other to the other side) are not counted.
+//! one plane: neither passes from one side of the other to the other side) are not counted. A
+//! degenerate triangle (collinear corners) has no interior and crosses nothing.
 //!
 //! **Exactness.** Every decision is the sign of an orientation determinant computed exactly
 //! (Shewchuk's adaptive predicates, the `robust` crate), so a vertex exactly on a plane and an
