@@ -308,7 +308,7 @@ pub fn crossings(args: CrossingsArgs) -> Result<(), CliError> {
     }
     let what = match files.has_obstacles() {
         true => "cloth–cloth and cloth–obstacle",
-        false => "cloth–cloth only: the run exported no obstacles (simulate --export-obstacles)",
+        false => "cloth–cloth only: no obstacle files (the scene has none, or simulate ran without --export-obstacles)",
     };
     match bad.len() {
         0 => {
