@@ -43,6 +43,7 @@ fn main() -> ExitCode {
         Command::Render(args) => cli::render(args),
         Command::Resample(args) => cli::resample(args),
         Command::Batch(args) => cli::batch(args),
+        Command::Crossings(args) => cli::crossings(args),
         Command::Convert { conf, out, base } => cli::convert(&conf, &out, base.as_deref()),
     };
     match result {

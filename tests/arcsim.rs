@@ -563,13 +563,22 @@ fn hinge_directions_follow_arcsims_bias_coordinate() {
 // ---------------------------------------------------------------------------------------------
 // ARCSim's scenes
 
-/// Per-frame face counts of an ARCSim conf simulated for `frames` frames.
+/// Per-frame face counts of an ARCSim conf simulated for `frames` frames; every frame must be
+/// free of crossing triangle pairs (issue 18: the exact count that goes to stats.json).
 fn simulate_faces(conf: &Path, frames: usize, mut each: impl FnMut(usize, &Simulation)) -> Vec<usize> {
     let scene = scene::load_path(conf, None).unwrap().scene;
     let mut sim = Simulation::new(scene).unwrap();
     let mut faces = vec![sim.state.mesh.faces.len()];
     for f in 1..=frames {
         sim.advance_frame().unwrap_or_else(|e| panic!("{}: frame {f}: {e}", conf.display()));
+        let c = sim.crossings();
+        assert!(
+            c.cloth.is_empty() && c.obstacle.is_empty(),
+            "{}: frame {f}: crossing triangle pairs: {} cloth–cloth, {} cloth–obstacle",
+            conf.display(),
+            c.cloth.len(),
+            c.obstacle.len()
+        );
         faces.push(sim.state.mesh.faces.len());
         each(f, &sim);
     }

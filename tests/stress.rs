@@ -2,7 +2,7 @@
 //! must, at every frame: stay finite; keep its total energy within the work put in; keep its
 //! largest principal strain under the bound stated for it below; be collision-free (no cloth node
 //! deeper than half the thickness inside an obstacle, no two non-adjacent cloth triangles
-//! intersecting); and it must finish.
+//! intersecting, no triangle pair crossing: issue 18); and it must finish.
 //!
 //! Energy bound: E(f) ≤ E(0) + W + M·|g|·5 cm, the last term a slack for the implicit steps'
 //! transient overshoot (the cloth dropping 5 cm). W = 0 for scenes whose handles and obstacles
@@ -140,6 +140,16 @@ fn run(s: &Stress) -> Result<(usize, usize), String> {
             if k > 0 {
                 return Err(format!("{what}: {k} intersecting triangle pairs"));
             }
+        }
+        // Issue 18: no triangle pair that truly crosses (the exact count that goes to
+        // stats.json), cloth with cloth whatever the scene's self-collision, cloth with obstacles.
+        let c = sim.crossings();
+        if !c.cloth.is_empty() || !c.obstacle.is_empty() {
+            return Err(format!(
+                "{what}: crossing triangle pairs: {} cloth–cloth, {} cloth–obstacle",
+                c.cloth.len(),
+                c.obstacle.len()
+            ));
         }
     }
     Ok((retries, retried_frames))

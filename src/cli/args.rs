@@ -43,6 +43,10 @@ pub enum Command {
     /// time; a failed shot does not stop the others. A rerun skips finished shots and resumes
     /// interrupted ones.
     Batch(BatchArgs),
+    /// Count the triangle pairs that cross in each frame of a run, from its files (frame_NNNN.obj
+    /// and, when exported, obstacle_<name>_NNNN.obj): cloth–cloth and cloth–obstacle, pairs
+    /// sharing a node skipped. Prints one line per frame; exits 1 if any pair crosses.
+    Crossings(CrossingsArgs),
     /// Convert an ARCSim conf into a viewcloth scene file.
     Convert {
         conf: PathBuf,
@@ -104,6 +108,21 @@ pub struct SimulateArgs {
     /// Base directory for an ARCSim conf's paths (default: the conf's grand-parent directory).
     #[arg(long)]
     pub base: Option<PathBuf>,
+    /// Move every initial cloth node by --jitter metres in a direction drawn from seed N
+    /// (independent per node; the same seed gives the same run). Recorded in stats.json.
+    #[arg(long, value_name = "N")]
+    pub jitter_seed: Option<u64>,
+    /// Size of the --jitter-seed displacement, metres (default 1e-6: 1 µm).
+    #[arg(long, value_name = "M", requires = "jitter_seed", value_parser = parse_jitter)]
+    pub jitter: Option<f64>,
+}
+
+/// `--jitter M`: a finite length in metres, 0 ≤ M ≤ 0.01.
+fn parse_jitter(text: &str) -> Result<f64, String> {
+    match text.parse::<f64>() {
+        Ok(m) if (0.0..=0.01).contains(&m) => Ok(m),
+        _ => Err(format!("expected a length in metres from 0 to 0.01, got \"{text}\"")),
+    }
 }
 
 #[derive(clap::Args)]
@@ -217,6 +236,24 @@ pub struct CompareArgs {
     /// (default: a bar on a terminal, lines otherwise; `none` with --quiet).
     #[arg(long, value_parser = ProgressMode::NAMES)]
     pub progress: Option<String>,
+}
+
+#[derive(clap::Args)]
+pub struct CrossingsArgs {
+    /// Output directory of a run.
+    #[arg(value_name = "RUN_DIR")]
+    pub dir: PathBuf,
+    /// Frames A..B, both included (default: every frame in the directory).
+    #[arg(long, value_name = "A..B")]
+    pub frames: Option<String>,
+    /// Only the closing line (and the frames with crossings).
+    #[arg(long)]
+    pub quiet: bool,
+    /// Also list each crossing pair: `pair`, the frame, `self` or `obstacle`, the two triangles
+    /// (0-based, in file order: cloth faces, then the obstacles' in name order) and a point of
+    /// the first (its centroid, m).
+    #[arg(long)]
+    pub pairs: bool,
 }
 
 #[derive(clap::Args)]

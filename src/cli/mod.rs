@@ -8,16 +8,20 @@ pub mod args;
 use std::path::{Path, PathBuf};
 
 use crate::camera::Camera;
+use crate::collision::crossings::{find_crossings, Soup};
 use crate::compare::{compare, markdown, CompareOptions};
 use crate::error::InputError;
 use crate::io::OutputFormat;
-use crate::render::{render_run, Colouring, RenderOptions};
+use crate::math::Vec3;
+use crate::render::{render_run, run_dir, Colouring, RenderOptions, RunFiles};
 use crate::scene::{self, RemeshMode};
 use crate::shot::{self, ShotError, ShotRequest};
 use crate::sim::progress::{Progress, ProgressMode};
 use crate::sim::SimError;
-use crate::sim::{claim_output, interrupt, resume, run_shot, CheckpointOptions, ResumeOptions, RunError, RunOptions};
-use args::{BatchArgs, CompareArgs, RenderArgs, ResampleArgs, ResumeArgs, SimulateArgs};
+use crate::sim::{
+    claim_output, interrupt, resume, run_shot, CheckpointOptions, Jitter, ResumeOptions, RunError, RunOptions,
+};
+use args::{BatchArgs, CompareArgs, CrossingsArgs, RenderArgs, ResampleArgs, ResumeArgs, SimulateArgs};
 
 /// Exit code for bad input (scene, mesh, command line).
 pub const EXIT_INPUT: u8 = 2;
@@ -132,7 +136,10 @@ pub fn simulate(args: SimulateArgs) -> Result<(), CliError> {
         camera,
         checkpoint_every,
         base,
+        jitter_seed,
+        jitter,
     } = args;
+    let jitter = jitter_seed.map(|seed| Jitter { seed, amplitude: jitter.unwrap_or(Jitter::AMPLITUDE) });
     set_threads(threads)?;
     // clap admits only RemeshMode::NAMES.
     let mode = mode.as_deref().and_then(RemeshMode::parse);
@@ -151,6 +158,7 @@ pub fn simulate(args: SimulateArgs) -> Result<(), CliError> {
         export_obstacles,
         format,
         obj_velocities,
+        jitter,
     };
     // Without --checkpoint-every, a checkpoint is written only when a signal stops the run.
     let ck = CheckpointOptions {
@@ -292,6 +300,63 @@ pub fn resample(args: ResampleArgs) -> Result<(), CliError> {
         args.out.display()
     );
     Ok(())
+}
+
+/// `viewcloth crossings`: per frame, the crossing pairs counted from the run's files alone
+/// (`collision::crossings`, as the run counts them into stats.json), one tab-separated line
+/// each; an error when any frame has one.
+pub fn crossings(args: CrossingsArgs) -> Result<(), CliError> {
+    let dir = args.dir.as_path();
+    let mut frames = run_dir::frame_numbers(dir)?;
+    if let Some((a, b)) = args.frames.as_deref().map(parse_frames).transpose()? {
+        frames.retain(|f| (a..=b).contains(f));
+        if frames.is_empty() {
+            return Err(CliError::Input(format!("{}: no frames in {a}..{b}", dir.display())));
+        }
+    }
+    let (first, last) = (frames[0], frames[frames.len() - 1]);
+    let files = RunFiles::scan(dir, first, last)?;
+    if !args.quiet {
+        println!("frame\tcrossings_self\tcrossings_obstacle");
+    }
+    let mut bad = Vec::new();
+    for &f in &frames {
+        let m = files.load(f)?;
+        let (cloth, obstacles) = m.triangles.split_at(m.cloth_triangles);
+        let found = find_crossings(Soup { x: &m.positions, tris: cloth }, Soup { x: &m.positions, tris: obstacles });
+        let (s, o) = (found.cloth.len(), found.obstacle.len());
+        if s + o > 0 {
+            bad.push(f);
+        }
+        if !args.quiet || s + o > 0 {
+            println!("{f}\t{s}\t{o}");
+        }
+        let found_pairs = found
+            .cloth
+            .iter()
+            .map(|p| ("self", p, 0))
+            .chain(found.obstacle.iter().map(|p| ("obstacle", p, cloth.len())));
+        for (kind, &(a, b), offset) in found_pairs.filter(|_| args.pairs) {
+            let c = cloth[a].iter().map(|&i| m.positions[i]).sum::<Vec3>() / 3.0;
+            println!("pair\t{f}\t{kind}\t{a}\t{}\t{:.6} {:.6} {:.6}", b + offset, c.x, c.y, c.z);
+        }
+    }
+    let what = match files.has_obstacles() {
+        true => "cloth–cloth and cloth–obstacle",
+        false => "cloth–cloth only: no obstacle files (the scene has none, or simulate ran without --export-obstacles)",
+    };
+    match bad.len() {
+        0 => {
+            println!("{}: {} frames, no crossings ({what})", dir.display(), frames.len());
+            Ok(())
+        }
+        n => Err(CliError::Run(format!(
+            "{}: {n} of {} frames have crossing triangle pairs (first: frame {}; {what})",
+            dir.display(),
+            frames.len(),
+            bad[0]
+        ))),
+    }
 }
 
 /// The shot `--shot N` or `--shot-from-env VAR` picks, checked against the list's length.

@@ -1,10 +1,12 @@
 //! Obstacles and collisions: obstacle descriptions (`shape`) and the bodies meshed from them
 //! (`obstacle`), broad phase, proximity repulsion, continuous collision detection and impact-zone
-//! resolution, with their parameters (`params`).
+//! resolution, with their parameters (`params`); the exact count of crossing triangle pairs that
+//! checks each written frame (`crossings`).
 
 pub mod broad;
 pub mod bvh;
 pub mod ccd;
+pub mod crossings;
 pub mod friction;
 pub mod geometry;
 pub mod impact_zones;

@@ -34,7 +34,7 @@ use crate::metrics::{SurfaceDistance, VisibleError};
 use crate::render::run_dir::{self, FrameMeshes, RunFiles};
 use crate::scene::{RemeshMode, Scene};
 use crate::sim::progress::{Progress, ProgressMode};
-use crate::sim::{run_shot, RunError, RunOptions};
+use crate::sim::{run_shot, Jitter, RunError, RunOptions};
 
 pub use floor::{floor_band, verdicts, FloorBand, MeasureBand, Verdict, MEASURES};
 pub use report::{markdown, svg_curves, svg_plot};
@@ -147,9 +147,6 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
                     msg: format!("scene '{}' has no cloth with a remesh block to run in {name} mode", s.name),
                 }));
             }
-            if let Some(seed) = perturb {
-                perturb_positions(&mut s, seed);
-            }
             let dir = opts.out_dir.join(name);
             if let Some(stats) = finished_run(&dir, &s, opts.frames.unwrap_or(s.frames)) {
                 if !opts.quiet {
@@ -167,6 +164,7 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
                 frames: opts.frames,
                 quiet: opts.quiet,
                 export_obstacles: true,
+                jitter: perturb.map(|seed| Jitter { seed, amplitude: FLOOR_PERTURBATION }),
                 ..Default::default()
             };
             let progress = Progress { label: Some(format!("{name} run")), ..Progress::new(opts.progress) };
@@ -219,25 +217,6 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
     };
     write_report(&report, &opts.out_dir)?;
     Ok(report)
-}
-
-/// Moves every initial node by `FLOOR_PERTURBATION` in a direction fixed by its index and
-/// `seed` (SplitMix64 finaliser of both: deterministic, independent across seeds; no handle is
-/// exempt, the size is far below any tolerance).
-fn perturb_positions(scene: &mut Scene, seed: u64) {
-    for (i, node) in scene.mesh.nodes.iter_mut().enumerate() {
-        let h = |k: u64| {
-            let mut z = (i as u64)
-                .wrapping_mul(0x9E37_79B9_7F4A_7C15)
-                .wrapping_add(seed.wrapping_mul(0xD1B5_4A32_D192_ED03))
-                .wrapping_add(k);
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            ((z ^ (z >> 31)) as Real / u64::MAX as Real) * 2.0 - 1.0
-        };
-        let d = Vec3::new(h(1), h(2), h(3));
-        node.x += d.try_normalize(0.0).unwrap_or_else(Vec3::x) * FLOOR_PERTURBATION;
-    }
 }
 
 /// The stats of the run in `dir` when it is finished and matches the request: no error, the

@@ -25,6 +25,14 @@ pub struct FrameStats {
     /// Smallest step taken in the frame (s); 0 for frame 0.
     #[serde(default)]
     pub min_step: f64,
+    /// Cloth triangle pairs (sharing no node) that cross at the frame end: one cloth through
+    /// itself or through another (`collision::crossings`; must be 0).
+    #[serde(default)]
+    pub crossings_self: usize,
+    /// Cloth–obstacle triangle pairs that cross at the frame end, against the obstacles as posed
+    /// (and exported) at the frame's time (must be 0).
+    #[serde(default)]
+    pub crossings_obstacle: usize,
     /// Retries by fault kind (absent when none).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub faults: BTreeMap<String, usize>,
@@ -87,6 +95,12 @@ pub struct RunStats {
     pub retries: usize,
     #[serde(default)]
     pub min_step: f64,
+    /// The seed and amplitude (m) of the jitter of the initial cloth positions
+    /// (`simulate --jitter-seed`, `compare`'s chaos-floor runs); absent for an unjittered run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jitter_seed: Option<u64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub jitter_m: Option<f64>,
     /// Frames from which the run was resumed (`viewcloth resume`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub resumed_at: Vec<usize>,

@@ -112,6 +112,11 @@ impl RunFiles {
         self.dir.join(format!("view_{frame:0w$}.png", w = self.digits))
     }
 
+    /// Whether the run exported obstacle meshes (`--export-obstacles`).
+    pub fn has_obstacles(&self) -> bool {
+        !self.obstacles.is_empty()
+    }
+
     /// The cloth of `frame` and the obstacles exported for it.
     pub fn load(&self, frame: usize) -> Result<FrameMeshes, InputError> {
         let mut meshes = FrameMeshes::default();
@@ -145,6 +150,25 @@ impl RunFiles {
         }
         Ok(Some(meshes))
     }
+}
+
+/// The frame numbers of the `frame_NNNN.obj` files in `dir`, ascending (none: an error naming
+/// the directory).
+pub fn frame_numbers(dir: &Path) -> Result<Vec<usize>, InputError> {
+    let entries = std::fs::read_dir(dir).map_err(|e| input_error(dir, format!("cannot list: {e}")))?;
+    let mut frames: Vec<usize> = entries
+        .filter_map(|e| {
+            let name = e.ok()?.file_name().to_string_lossy().into_owned();
+            let number = name.strip_prefix("frame_")?.strip_suffix(".obj")?;
+            number.bytes().all(|b| b.is_ascii_digit()).then(|| number.parse().ok())?
+        })
+        .collect();
+    frames.sort_unstable();
+    frames.dedup();
+    if frames.is_empty() {
+        return Err(input_error(dir, "no frame_NNNN.obj files (expected the output directory of a run)"));
+    }
+    Ok(frames)
 }
 
 fn frame_name(frame: usize, digits: usize) -> String {

@@ -190,6 +190,26 @@ impl Scene {
         n
     }
 
+    /// Moves every initial cloth node by `amplitude` (m) in a direction fixed by its index and
+    /// `seed` (SplitMix64 finaliser of both: deterministic, independent across nodes and
+    /// seeds). No node is exempt, handles included: the size is meant to be far below any
+    /// tolerance (1 µm for `compare`'s chaos floor and `simulate --jitter-seed`).
+    pub fn jitter_positions(&mut self, seed: u64, amplitude: Real) {
+        for (i, node) in self.mesh.nodes.iter_mut().enumerate() {
+            let h = |k: u64| {
+                let mut z = (i as u64)
+                    .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+                    .wrapping_add(seed.wrapping_mul(0xD1B5_4A32_D192_ED03))
+                    .wrapping_add(k);
+                z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+                z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+                ((z ^ (z >> 31)) as Real / u64::MAX as Real) * 2.0 - 1.0
+            };
+            let d = Vec3::new(h(1), h(2), h(3));
+            node.x += d.try_normalize(0.0).unwrap_or_else(Vec3::x) * amplitude;
+        }
+    }
+
     /// Refuses a cloth remeshed in view mode when the scene has no camera to give its view
     /// factors (an error naming that cloth's `remesh.mode`).
     pub fn require_camera_for_view(&self) -> Result<(), InputError> {

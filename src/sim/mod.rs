@@ -17,12 +17,13 @@ pub mod timers;
 pub mod workspace;
 
 pub use run::{
-    check_output, claim_output, clear_output, resume, run, run_shot, run_with_checkpoints, CheckpointOptions,
+    check_output, claim_output, clear_output, resume, run, run_shot, run_with_checkpoints, CheckpointOptions, Jitter,
     ResumeOptions, RunError, RunOptions,
 };
 pub use state::SimState;
 pub use workspace::Workspace;
 
+use crate::collision::crossings::{find_crossings, Crossings, Soup};
 use crate::collision::world::CollisionWorld;
 use crate::error::InputError;
 use crate::forces::membrane::{deformation_gradient, max_principal_strain};
@@ -150,6 +151,21 @@ impl Simulation {
         (0..world.bodies.len())
             .map(|b| world.with_sdf(b, self.state.time, |sdf| sdf.count_deeper_than(&x, 0.5 * world.params.thickness)))
             .sum()
+    }
+
+    /// The triangle pairs that cross now (`collision::crossings`): cloth with cloth, and cloth
+    /// with the obstacles posed at the current time.
+    pub fn crossings(&self) -> Crossings {
+        let m = &self.state.mesh;
+        let x = m.positions();
+        let tris: Vec<[usize; 3]> = (0..m.faces.len()).map(|f| m.face_nodes(f)).collect();
+        let (mut obs_x, mut obs_tris) = (Vec::new(), Vec::new());
+        for body in self.ws.collisions.iter().flat_map(|w| &w.bodies) {
+            let base = obs_x.len();
+            obs_x.extend(body.positions_at(self.state.time));
+            obs_tris.extend(body.triangles().iter().map(|t| t.map(|i| i + base)));
+        }
+        find_crossings(Soup { x: &x, tris: &tris }, Soup { x: &obs_x, tris: &obs_tris })
     }
 
     /// Per-frame measurements (without timings).

@@ -223,6 +223,10 @@ impl Output<'_> {
             });
             sim.ws.timers.since(Stage::PenetrationCheck, clock);
         }
+        let check = Instant::now();
+        let crossings = sim.crossings();
+        (fs.crossings_self, fs.crossings_obstacle) = (crossings.cloth.len(), crossings.obstacle.len());
+        sim.ws.timers.since(Stage::CrossingCheck, check);
         let faults = std::mem::take(&mut sim.ws.faults);
         fs.steps = faults.steps;
         fs.retries = faults.retries;

@@ -10,6 +10,7 @@ use crate::error::InputError;
 use crate::io::obj::ClothOut;
 use crate::io::stats::RunStats;
 use crate::io::OutputFormat;
+use crate::math::Real;
 use crate::scene::{RemeshMode, Scene};
 use crate::shot::{self, ShotRequest};
 
@@ -31,6 +32,21 @@ pub struct RunOptions {
     pub format: OutputFormat,
     /// OBJ frames carry each node's velocity on an `nv` line (ARCSim's).
     pub obj_velocities: bool,
+    /// Move the initial cloth positions by a seeded jitter (`Scene::jitter_positions`).
+    pub jitter: Option<Jitter>,
+}
+
+/// A seeded jitter of the initial cloth positions: every node moved by `amplitude` (m) in its
+/// own direction drawn from `seed`. Recorded in stats.json (`jitter_seed`, `jitter_m`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Jitter {
+    pub seed: u64,
+    pub amplitude: Real,
+}
+
+impl Jitter {
+    /// The default amplitude of `simulate --jitter-seed` (m).
+    pub const AMPLITUDE: Real = 1e-6;
 }
 
 /// Checkpointing of a run: every `every` frames (and at the last; `every` 0: only when the run
@@ -100,7 +116,7 @@ pub fn run_with_checkpoints(
 
 /// `run_with_checkpoints`, reporting its frames to `progress` (`opts.quiet` is not looked at).
 pub fn run_shot(
-    scene: Scene,
+    mut scene: Scene,
     opts: &RunOptions,
     ck: Option<&CheckpointOptions>,
     progress: &Progress,
@@ -119,6 +135,11 @@ pub fn run_shot(
         format: opts.format,
         obj_velocities: opts.obj_velocities,
     });
+    // After the fingerprint: `resume` reloads the scene as it is in its file, and the jittered
+    // positions live on in the checkpointed state.
+    if let Some(j) = &opts.jitter {
+        scene.jitter_positions(j.seed, j.amplitude);
+    }
     let cloths = ClothOut::of(&scene);
     let last = scene.preroll_frames + frames;
     let mut sim = Simulation::new(scene)?;
@@ -131,7 +152,13 @@ pub fn run_shot(
     } else {
         "uniform"
     };
-    let stats = RunStats { scene: sim.scene.name.clone(), mode: mode.into(), ..Default::default() };
+    let stats = RunStats {
+        scene: sim.scene.name.clone(),
+        mode: mode.into(),
+        jitter_seed: opts.jitter.map(|j| j.seed),
+        jitter_m: opts.jitter.map(|j| j.amplitude),
+        ..Default::default()
+    };
     let out = Output {
         dir: &opts.out_dir,
         cloths,

@@ -34,6 +34,8 @@ pub enum Stage {
     Remesh,
     /// Counting cloth nodes inside obstacles at the frame end.
     PenetrationCheck,
+    /// Counting crossing triangle pairs at the frame end (`collision::crossings`).
+    CrossingCheck,
     /// Writing the frame's meshes.
     Output,
     /// Writing a checkpoint.
@@ -56,6 +58,7 @@ impl Stage {
             Stage::Sizing => "sizing",
             Stage::Remesh => "remesh",
             Stage::PenetrationCheck => "penetration_check",
+            Stage::CrossingCheck => "crossing_check",
             Stage::Output => "output",
             Stage::Checkpoint => "checkpoint",
         }
