@@ -2,13 +2,15 @@
 //! every edge longer than 1 in the sizing metric (worst first, local flips after each), then
 //! collapse edges whose removal keeps every new edge under 0.9 (local flips after each), until
 //! nothing changes. Operations are checked values (`ops`); boundaries keep their shape, seams and
-//! handle nodes are preserved.
+//! handle nodes are preserved, and no flip or collapse makes the cloth cross itself (`guard`).
 
+pub mod guard;
 pub mod ops;
 pub mod work;
 
 use crate::math::{Mat2, Real};
 use crate::mesh::{Mesh, MeshError};
+use guard::Guard;
 pub use work::Finished;
 use work::Work;
 
@@ -47,22 +49,33 @@ pub fn remesh(
 ) -> Result<(Finished, RemeshStats), MeshError> {
     let mut w = Work::new(mesh, vsize, pinned);
     let mut stats = RemeshStats::default();
-    flip_all(&mut w, &mut stats);
-    split_all(&mut w, &mut stats);
+    let mut guard = Guard::new(&w);
+    flip_all(&mut w, &mut guard, &mut stats);
+    split_all(&mut w, &mut guard, &mut stats);
     if limits.coarsen {
-        collapse_all(&mut w, limits, &mut stats);
+        collapse_all(&mut w, &mut guard, limits, &mut stats);
     }
     Ok((w.finish(mesh.nodes.len())?, stats))
 }
 
-fn flip_all(w: &mut Work, stats: &mut RemeshStats) {
+/// Applies a flip or collapse unless it would push cloth through cloth (`guard`).
+fn apply_guarded(w: &mut Work, guard: &mut Guard, op: &ops::Op) -> bool {
+    if guard.crosses(w, op) {
+        return false;
+    }
+    for f in op.apply(w) {
+        guard.insert(w, f);
+    }
+    true
+}
+
+fn flip_all(w: &mut Work, guard: &mut Guard, stats: &mut RemeshStats) {
     for _ in 0..MAX_PASSES {
         let mut flipped = 0;
         for (a, b) in w.edges() {
             if w.valive[a] && w.valive[b] && ops::should_flip(w, a, b, FLIP_THRESHOLD, MAX_FLIP_FOLD) {
                 if let Some(op) = ops::flip(w, a, b) {
-                    op.apply(w);
-                    flipped += 1;
+                    flipped += usize::from(apply_guarded(w, guard, &op));
                 }
             }
         }
@@ -74,7 +87,7 @@ fn flip_all(w: &mut Work, stats: &mut RemeshStats) {
 }
 
 /// Flips around the faces of `verts` until they are locally Delaunay in the metric.
-fn flip_around(w: &mut Work, verts: &[usize], stats: &mut RemeshStats) {
+fn flip_around(w: &mut Work, guard: &mut Guard, verts: &[usize], stats: &mut RemeshStats) {
     for _ in 0..MAX_PASSES {
         let mut edges: Vec<(usize, usize)> = verts
             .iter()
@@ -91,8 +104,7 @@ fn flip_around(w: &mut Work, verts: &[usize], stats: &mut RemeshStats) {
         for (a, b) in edges {
             if ops::should_flip(w, a, b, FLIP_THRESHOLD, MAX_FLIP_FOLD) {
                 if let Some(op) = ops::flip(w, a, b) {
-                    op.apply(w);
-                    flipped += 1;
+                    flipped += usize::from(apply_guarded(w, guard, &op));
                 }
             }
         }
@@ -103,7 +115,7 @@ fn flip_around(w: &mut Work, verts: &[usize], stats: &mut RemeshStats) {
     }
 }
 
-fn split_all(w: &mut Work, stats: &mut RemeshStats) {
+fn split_all(w: &mut Work, guard: &mut Guard, stats: &mut RemeshStats) {
     for _ in 0..MAX_PASSES {
         let mut bad: Vec<(Real, usize, usize)> =
             w.edges().into_iter().map(|(a, b)| (w.metric_length(a, b), a, b)).filter(|e| e.0 > 1.0).collect();
@@ -118,15 +130,18 @@ fn split_all(w: &mut Work, stats: &mut RemeshStats) {
             }
             let Some(op) = ops::split(w, a, b) else { continue };
             let first_new = w.u.len();
-            op.apply(w);
+            // A split keeps the surface: no crossing test.
+            for f in op.apply(w) {
+                guard.insert(w, f);
+            }
             stats.splits += 1;
             let new_verts: Vec<usize> = (first_new..w.u.len()).collect();
-            flip_around(w, &new_verts, stats);
+            flip_around(w, guard, &new_verts, stats);
         }
     }
 }
 
-fn collapse_all(w: &mut Work, limits: &RemeshLimits, stats: &mut RemeshStats) {
+fn collapse_all(w: &mut Work, guard: &mut Guard, limits: &RemeshLimits, stats: &mut RemeshStats) {
     let floor = 1e-4 * limits.size_min * limits.size_min;
     for _ in 0..MAX_PASSES {
         let mut collapsed = 0;
@@ -139,10 +154,11 @@ fn collapse_all(w: &mut Work, limits: &RemeshLimits, stats: &mut RemeshStats) {
             }
             for (i, j) in [(a, b), (b, a)] {
                 let Some(op) = ops::collapse(w, i, j) else { continue };
-                if ops::collapse_ok(w, &op, j, limits.aspect_min, COLLAPSE_MAX_LENGTH, floor) {
-                    op.apply(w);
+                if ops::collapse_ok(w, &op, j, limits.aspect_min, COLLAPSE_MAX_LENGTH, floor)
+                    && apply_guarded(w, guard, &op)
+                {
                     collapsed += 1;
-                    flip_around(w, &[j], stats);
+                    flip_around(w, guard, &[j], stats);
                     break;
                 }
             }
