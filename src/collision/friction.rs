@@ -47,6 +47,10 @@ pub const MAX_SOLVES: usize = 6;
 /// first guess: with thousands of contacts some contact changes at every solve, and each
 /// refactorisation costs as much as the step's first.
 pub const MAX_REFACTORS: usize = 1;
+/// Mode changes refactorise only when at least this fraction of the contacts wants one (and at
+/// least one does); fewer wait for the next step. With thousands of contacts a handful change
+/// at every solve.
+pub const MIN_CHANGES: Real = 0.01;
 /// A sliding force that moved (in direction or size) by more than this fraction of its size is
 /// updated: Coulomb's law holds to 2% of the friction force (about 1° in direction).
 const SLIDE_TOLERANCE: Real = 0.02;
@@ -265,46 +269,46 @@ impl Friction {
     }
 
     /// Re-evaluates every contact's mode at the solved velocities `v` (module doc); `first` for
-    /// the first update of a step (no hysteresis). With `modes` false, mode changes are not
-    /// applied (the matrix stays): they are counted in `pending` and become the next step's
-    /// first guess (`stuck`).
+    /// the first update of a step (no hysteresis). Mode changes are applied only with `modes`
+    /// and when at least `MIN_CHANGES` of the contacts want one; otherwise the matrix stays,
+    /// they are counted in `pending` and become the next step's first guess (`stuck`).
     pub fn update(&mut self, frame: &FrictionFrame, v: &[Vec3], first: bool, modes: bool) -> Change {
         let slack = if first { 0.0 } else { HYSTERESIS };
-        let mut change = Change::None;
-        self.pending = 0;
-        for c in &mut self.contacts {
-            let (fn1, vt) = frame.kinematics(c, v);
-            let (bound, speed) = ((c.mu * fn1).min(c.cap), vt.norm());
-            c.next_stick = c.mode == Mode::Stick;
+        // Coulomb's verdict per contact: its state at `v` and whether it should stick.
+        let verdicts: Vec<(Real, Vec3, bool)> = self
+            .contacts
+            .iter()
+            .map(|c| {
+                let (fn1, vt) = frame.kinematics(c, v);
+                let (bound, speed) = ((c.mu * fn1).min(c.cap), vt.norm());
+                let stick = match c.mode {
+                    Mode::Stick => frame.stick_coefficient(c) * speed <= bound * (1.0 + slack.max(SLIDE_TOLERANCE)),
+                    Mode::Slide(s) => {
+                        // Sticks when reversed by more than the slack, by no more than the
+                        // friction force alone changes it in a step (friction would have stopped
+                        // it), or when sliding so slowly that the stick damper would hold it
+                        // within the bound.
+                        let (along, reach) = (vt.dot(&s.t), s.force * frame.h / c.m_eff);
+                        let reversed = along <= -slack * reach && -along <= reach;
+                        let creeping = frame.stick_coefficient(c) * speed < bound * (1.0 - slack);
+                        c.coupled && bound > 0.0 && (reversed || creeping)
+                    }
+                };
+                (bound, vt, stick)
+            })
+            .collect();
+        let wanted = self.contacts.iter().zip(&verdicts).filter(|(c, v)| (c.mode == Mode::Stick) != v.2).count();
+        let apply = modes && wanted > 0 && wanted as Real >= MIN_CHANGES * self.contacts.len() as Real;
+        self.pending = if apply { 0 } else { wanted };
+        let mut change = if apply { Change::Modes } else { Change::None };
+        for (c, &(bound, vt, stick)) in self.contacts.iter_mut().zip(&verdicts) {
+            c.next_stick = stick;
+            let speed = vt.norm();
             match c.mode {
-                Mode::Stick => {
-                    if frame.stick_coefficient(c) * speed > bound * (1.0 + slack.max(SLIDE_TOLERANCE)) {
-                        c.next_stick = false;
-                        match modes {
-                            true => {
-                                c.mode = Mode::Slide(frame.slide(c, vt, bound));
-                                change = Change::Modes;
-                            }
-                            false => self.pending += 1,
-                        }
-                    }
-                }
+                Mode::Stick if !stick && apply => c.mode = Mode::Slide(frame.slide(c, vt, bound)),
+                Mode::Stick => {}
+                Mode::Slide(_) if stick && apply => c.mode = Mode::Stick,
                 Mode::Slide(s) => {
-                    // Sticks when reversed by more than the slack, by no more than the friction
-                    // force alone changes it in a step (friction would have stopped it), or when
-                    // sliding so slowly that the stick damper would hold it within the bound.
-                    let (along, reach) = (vt.dot(&s.t), s.force * frame.h / c.m_eff);
-                    let reversed = along <= -slack * reach && -along <= reach;
-                    let creeping = frame.stick_coefficient(c) * speed < bound * (1.0 - slack);
-                    if c.coupled && bound > 0.0 && (reversed || creeping) {
-                        c.next_stick = true;
-                        if modes {
-                            c.mode = Mode::Stick;
-                            change = Change::Modes;
-                            continue;
-                        }
-                        self.pending += 1;
-                    }
                     // The force follows when it moved by more than the tolerance of its size.
                     let t1 = if speed > 0.0 && c.coupled { vt / speed } else { s.t };
                     let delta = (bound * t1 - s.force * s.t).norm();
