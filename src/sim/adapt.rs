@@ -154,7 +154,6 @@ impl Simulation {
             })
             .collect();
         state.extra_pairs.clear();
-        state.stuck.clear();
         self.ws.remeshed(state)?;
         self.push_out(None)?;
         Ok(())
