@@ -274,18 +274,9 @@ mod tests {
         assert!(crossing > 2000, "too few crossing cases drawn ({crossing})");
     }
 
-    /// A flat grid of `n`×`n` squares in z = 0, two triangles each.
+    /// A flat grid of `n`×`n` squares in the plane at height `z`, two triangles each.
     fn grid(n: usize, z: f64) -> (Vec<Vec3>, Vec<[usize; 3]>) {
-        let x = (0..=n).flat_map(|j| (0..=n).map(move |i| v(i as f64 / n as f64, j as f64 / n as f64, z))).collect();
-        let id = |i: usize, j: usize| j * (n + 1) + i;
-        let tris = (0..n)
-            .flat_map(|j| {
-                (0..n).flat_map(move |i| {
-                    [[id(i, j), id(i + 1, j), id(i + 1, j + 1)], [id(i, j), id(i + 1, j + 1), id(i, j + 1)]]
-                })
-            })
-            .collect();
-        (x, tris)
+        crate::metrics::test_grid(n, n, |i, j| v(i, j, z))
     }
 
     #[test]

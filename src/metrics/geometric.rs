@@ -175,18 +175,7 @@ mod tests {
 
     /// The unit square [0, 1]² in the plane z = `z`, as an `n` × `n` grid of 2n² triangles.
     fn square(n: usize, z: Real) -> (Vec<Vec3>, Vec<[usize; 3]>) {
-        let x = (0..=n)
-            .flat_map(|j| (0..=n).map(move |i| Vec3::new(i as Real / n as Real, j as Real / n as Real, z)))
-            .collect();
-        let id = |i: usize, j: usize| j * (n + 1) + i;
-        let tris = (0..n)
-            .flat_map(|j| {
-                (0..n).flat_map(move |i| {
-                    [[id(i, j), id(i + 1, j), id(i + 1, j + 1)], [id(i, j), id(i + 1, j + 1), id(i, j + 1)]]
-                })
-            })
-            .collect();
-        (x, tris)
+        crate::metrics::test_grid(n, n, |i, j| Vec3::new(i, j, z))
     }
 
     fn surface<'a>(x: &'a [Vec3], tris: &'a [[usize; 3]], weight: Option<&'a [Real]>) -> Surface<'a> {
