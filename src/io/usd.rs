@@ -78,7 +78,7 @@ pub fn frame_samples(mesh: &Mesh, cloths: &[ClothOut], obstacles: &[ObstacleFram
 
 /// Prim names: identifiers (letters, digits, `_`; not starting with a digit), made distinct by
 /// an `_<index>` suffix where two would be equal.
-fn prim_names<'a>(names: impl Iterator<Item = &'a str>) -> Vec<String> {
+pub fn prim_names<'a>(names: impl Iterator<Item = &'a str>) -> Vec<String> {
     let mut out: Vec<String> = Vec::new();
     for (i, name) in names.enumerate() {
         let mut id: String = name.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
