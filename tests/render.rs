@@ -1,7 +1,8 @@
 //! `viewcloth render` on 30 frames of `sheet_on_sphere` (obstacles exported), simulated once:
 //! every tenth frame gives a valid 320×180 PNG (read back by the `png` crate's decoder), the same bytes
 //! when rendered again, with cloth in frame 30; `--color view` colours the cloth by its view
-//! factor; the sphere is drawn from a camera that sees it; bad input is refused in one line with
+//! factor; the sphere is drawn from a camera that sees it; the run's USD samples alone (a
+//! `--format usd` run) render as its OBJ frames do; bad input is refused in one line with
 //! exit code 2 and writes nothing.
 
 use std::path::{Path, PathBuf};
@@ -24,6 +25,8 @@ fn simulated() -> &'static Path {
             "--frames",
             "30",
             "--export-obstacles",
+            "--format",
+            "both",
             "--quiet",
             "--out",
             dir.to_str().unwrap(),
@@ -39,7 +42,24 @@ fn run_copy(name: &str) -> PathBuf {
     let dir = temp_dir(name);
     for e in std::fs::read_dir(from).unwrap() {
         let e = e.unwrap();
-        std::fs::copy(e.path(), dir.join(e.file_name())).unwrap();
+        if e.file_type().unwrap().is_file() {
+            std::fs::copy(e.path(), dir.join(e.file_name())).unwrap();
+        }
+    }
+    dir
+}
+
+/// The simulated run as a `--format usd` run holds it: stats.json, the layer and the samples.
+fn usd_copy(name: &str) -> PathBuf {
+    let from = simulated();
+    let dir = temp_dir(name);
+    std::fs::create_dir_all(dir.join("usd_samples")).unwrap();
+    for f in ["stats.json", "cloth.usda"] {
+        std::fs::copy(from.join(f), dir.join(f)).unwrap();
+    }
+    for e in std::fs::read_dir(from.join("usd_samples")).unwrap() {
+        let e = e.unwrap();
+        std::fs::copy(e.path(), dir.join("usd_samples").join(e.file_name())).unwrap();
     }
     dir
 }
@@ -182,4 +202,29 @@ fn bad_input_is_refused_in_one_line_and_writes_nothing() {
     std::fs::write(dir.join("obstacle_sphere_0010.obj"), "v 0 0 0\n").unwrap();
     assert_refused(&render(&dir, &["--frames", "0..10"]), "obstacle_sphere_0010.obj");
     assert_eq!(previews(&dir), Vec::<String>::new());
+}
+
+/// A run written with `--format usd` (no OBJ) renders from its USD samples: the same pictures as
+/// from its OBJ frames but for the rounding of positions to 32-bit floats (a few edge pixels);
+/// a missing samples file is named, and a run with neither OBJ frames nor samples is refused.
+#[test]
+fn a_usd_run_renders_from_its_samples() {
+    let (obj, usd) = (run_copy("from_obj"), usd_copy("from_usd"));
+    for dir in [&obj, &usd] {
+        let out = render(dir, &["--every", "10"]);
+        assert!(out.status.success(), "render {}: {}", dir.display(), String::from_utf8_lossy(&out.stderr));
+    }
+    assert_eq!(previews(&usd), previews(&obj));
+    for n in previews(&obj) {
+        let (a, b) = (pixels(&obj.join(&n)), pixels(&usd.join(&n)));
+        let differ = a.iter().zip(&b).filter(|(p, q)| p != q).count();
+        assert!(differ * 1000 <= a.len(), "{n}: {differ} of {} pixels differ", a.len());
+        // The sphere (salmon) is there too: the obstacles come from the samples.
+        let salmon = |p: &[i32; 3]| p[0] > p[2] + 40;
+        assert_eq!(count(&a, salmon) > 0, count(&b, salmon) > 0, "{n}: obstacle");
+    }
+    std::fs::remove_file(usd.join("usd_samples/frame_0020.txt")).unwrap();
+    assert_refused(&render(&usd, &["--every", "10"]), "usd_samples/frame_0020.txt");
+    std::fs::remove_dir_all(usd.join("usd_samples")).unwrap();
+    assert_refused(&render(&usd, &["--every", "10"]), "frame_0000.obj: missing (no OBJ frame, nor usd_samples/");
 }

@@ -5,7 +5,8 @@
 //! short adaptive run that starts at frame 1001 after a preroll, with an exported obstacle:
 //! frame range, points per time code, `UsdGeom.Mesh.ValidateTopology` at every time code,
 //! points, velocities, faces and face-varying st equal to the run's OBJ frames (written with
-//! their `nv` velocity lines); and the same for that run resampled onto one topology
+//! their `nv` velocity lines), the obstacles' velocities equal to their scripted motion's; and
+//! the same for that run resampled onto one topology
 //! (`resample --auto`).
 //!
 //! When Python or `usd-core` cannot be had (no python3, no package registry) the test fails,
@@ -22,6 +23,8 @@ use serde_json::{json, Value};
 use viewcloth::io::obj::parse_obj;
 
 const START: usize = 1001;
+/// The moving obstacle's velocity in the read-back test (m/s).
+const BALL_VELOCITY: [f64; 3] = [0.5, -0.25, 0.125];
 
 /// sheet_on_sphere, coarse and short, numbered from 1001 after a 2-frame preroll.
 fn scene_json(frames: usize) -> Value {
@@ -119,13 +122,28 @@ fn usd_layer_reads_back_in_pixar_usd_with_the_runs_frames_and_velocities() {
     };
     let dir = temp_dir("readback");
     let frames = 4;
-    let scene = write_scene(&dir, frames);
+    // A second obstacle, far from the cloth, moving at a known constant velocity: Hermite keys
+    // whose tangents are the chord's make the motion exactly linear.
+    let mut v = scene_json(frames);
+    let ball = json!({
+        "name": "ball", "sphere": { "radius": 0.05 },
+        "motion": [
+            { "time": -1, "translate": [3, 0, 0], "velocity": { "translate": BALL_VELOCITY } },
+            { "time": 9, "translate": [3.0 + 10.0 * BALL_VELOCITY[0], 10.0 * BALL_VELOCITY[1], 10.0 * BALL_VELOCITY[2]],
+              "velocity": { "translate": BALL_VELOCITY } }
+        ]
+    });
+    v["obstacles"].as_array_mut().unwrap().push(ball);
+    let scene = dir.join("scene.json");
+    std::fs::write(&scene, v.to_string()).unwrap();
     let o = dir.join("run");
     let args = ["--format", "both", "--obj-velocities", "--export-obstacles", "--quiet"];
     run(&[&["simulate", scene.to_str().unwrap(), "--out", o.to_str().unwrap()][..], &args].concat());
     let expected = json!({
         "start": START, "end": START + frames, "fps": 25,
-        "cloth": "/World/cloth/sheet", "obstacles": ["/World/obstacles/sphere"],
+        "cloth": "/World/cloth/sheet", "obstacles": ["/World/obstacles/sphere", "/World/obstacles/ball"],
+        // The sphere holds still until t = 2 s; the ball moves at BALL_VELOCITY throughout.
+        "obstacle_velocities": { "/World/obstacles/sphere": [0, 0, 0], "/World/obstacles/ball": BALL_VELOCITY },
         "frames": obj_frames(&o, frames, true),
     });
     check(&python, &o.join("cloth.usda"), &expected, &dir);

@@ -287,15 +287,17 @@ pub struct RenderArgs {
 #[derive(clap::Args)]
 #[command(group(clap::ArgGroup::new("target").required(true).args(["mesh", "auto"])))]
 pub struct ResampleArgs {
-    /// Output directory of a run with OBJ frames (`--format obj` or `both`).
+    /// Output directory of a run with OBJ frames (`--format obj` or `both`), of one cloth or
+    /// several.
     #[arg(value_name = "RUN_DIR")]
     pub dir: PathBuf,
     /// The fixed mesh: an OBJ whose texture coordinates (in the run's, i.e. the input's, units)
     /// are the material locations its vertices track (e.g. the garment the scene was made from).
+    /// Once per cloth of the run, in the order of its frames' `o` groups.
     #[arg(long, value_name = "OBJ")]
-    pub mesh: Option<PathBuf>,
-    /// Make the fixed mesh from the run: its first frame refined to the finest sizing the run
-    /// ever had at each place.
+    pub mesh: Vec<PathBuf>,
+    /// Make the fixed meshes from the run: each cloth's first frame refined to the finest sizing
+    /// the run ever had at each place.
     #[arg(long)]
     pub auto: bool,
     /// Where to write (frame_NNNN.obj, cloth.pc2, cloth.usda, resample.json).

@@ -282,9 +282,9 @@ pub fn render(args: RenderArgs) -> Result<(), CliError> {
 
 pub fn resample(args: ResampleArgs) -> Result<(), CliError> {
     use crate::resample::{resample, ResampleError, Target};
-    let target = match args.mesh {
-        Some(m) => Target::Mesh(m),
-        None => Target::Auto,
+    let target = match args.auto {
+        true => Target::Auto,
+        false => Target::Meshes(args.mesh),
     };
     let r = resample(&args.dir, &target, &args.out).map_err(|e| match e {
         ResampleError::Input(e) => CliError::Input(e.to_string()),

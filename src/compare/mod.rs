@@ -26,7 +26,6 @@ use serde::Serialize;
 use crate::camera::Camera;
 use crate::collision::obstacle::ObstacleBody;
 use crate::error::InputError;
-use crate::io::obj::read_obj;
 use crate::io::stats::RunStats;
 use crate::math::{Real, Vec3};
 use crate::metrics::{surface_distance, visible_error, FrameImage, Surface};
@@ -238,7 +237,7 @@ fn finished_run(dir: &Path, scene: &Scene, frames: usize) -> Option<RunStats> {
     let last = scene.start_frame + frames;
     let files = RunFiles::scan(dir, last, last).ok()?;
     let obstacles = scene.obstacles.is_empty() || files.obstacles(last).ok()?.is_some();
-    (matches && obstacles && files.frame_path(last).is_file()).then_some(stats)
+    (matches && obstacles && files.has_frame(last)).then_some(stats)
 }
 
 fn read_stats(dir: &Path) -> Result<RunStats, RunError> {
@@ -255,10 +254,8 @@ type ClothMesh = (Vec<Vec3>, Vec<[usize; 3]>);
 
 /// A frame's cloth surface: positions and triangles (file names as the run numbers them).
 fn frame_mesh(files: &RunFiles, frame: usize) -> Result<ClothMesh, RunError> {
-    let path = files.frame_path(frame);
-    let obj = read_obj(&path).map_err(|msg| RunError::Input(InputError { file: path.clone(), location: None, msg }))?;
-    let tris = obj.triangles.iter().map(|t| t.map(|c| c.v)).collect();
-    Ok((obj.positions, tris))
+    let m = files.cloth(frame).map_err(RunError::Input)?;
+    Ok((m.positions, m.triangles))
 }
 
 /// The obstacles of `frame` at `time`: those the reference run exported, or else the scene's

@@ -4,6 +4,7 @@ pub mod json;
 pub mod obj;
 pub mod stats;
 pub mod usd;
+pub mod usd_samples;
 
 use std::path::{Path, PathBuf};
 

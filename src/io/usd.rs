@@ -21,7 +21,8 @@
 //!     def Scope "cloth" { def Mesh "<cloth>" { points, velocities (m/s), extent,
 //!         faceVertexCounts, faceVertexIndices, primvars:st (face-varying, indexed by
 //!         primvars:st:indices, in the input's texture units): all time-sampled } }
-//!     def Scope "obstacles" { def Mesh "<obstacle>" { points, extent time-sampled; the faces
+//!     def Scope "obstacles" { def Mesh "<obstacle>" { points, extent, velocities (m/s)
+//!         time-sampled (velocities once, zero, for an obstacle that never moves); the faces
 //!         once } }
 //! }
 //! ```
@@ -55,6 +56,8 @@ pub struct StageInfo {
 pub struct ObstacleFrame<'a> {
     pub name: &'a str,
     pub positions: Vec<Vec3>,
+    /// Per vertex (m/s); `None` for an obstacle that never moves (written once, as zeros).
+    pub velocities: Option<Vec<Vec3>>,
     pub triangles: &'a [[usize; 3]],
 }
 
@@ -75,7 +78,7 @@ pub fn frame_samples(mesh: &Mesh, cloths: &[ClothOut], obstacles: &[ObstacleFram
 
 /// Prim names: identifiers (letters, digits, `_`; not starting with a digit), made distinct by
 /// an `_<index>` suffix where two would be equal.
-fn prim_names<'a>(names: impl Iterator<Item = &'a str>) -> Vec<String> {
+pub fn prim_names<'a>(names: impl Iterator<Item = &'a str>) -> Vec<String> {
     let mut out: Vec<String> = Vec::new();
     for (i, name) in names.enumerate() {
         let mut id: String = name.chars().map(|c| if c.is_ascii_alphanumeric() { c } else { '_' }).collect();
@@ -217,7 +220,13 @@ fn obstacle_samples(s: &mut String, prim: &str, o: &ObstacleFrame) {
     line(s, prim, 'u', "int[] faceVertexIndices", |s| ints(s, o.triangles.iter().flatten().copied()));
     line(s, prim, 't', "point3f[] points", |s| vec3s(s, o.positions.iter()));
     line(s, prim, 't', "float3[] extent", |s| extent(s, o.positions.iter()));
+    match &o.velocities {
+        Some(v) => line(s, prim, 't', "vector3f[] velocities", |s| vec3s(s, v.iter())),
+        None => line(s, prim, 'u', "vector3f[] velocities", |s| vec3s(s, o.positions.iter().map(|_| &ZERO))),
+    }
 }
+
+const ZERO: Vec3 = Vec3::new(0.0, 0.0, 0.0);
 
 /// Why a layer could not be assembled.
 #[derive(Debug, thiserror::Error)]
@@ -413,8 +422,8 @@ mod tests {
         let cloths = [ClothOut { name: "sheet".into(), uv_unit: 0.5 }];
         let tri = [[0, 1, 2]];
         let frame = |mesh: &Mesh| {
-            let o =
-                ObstacleFrame { name: "ball", positions: vec![Vec3::zeros(), Vec3::x(), Vec3::y()], triangles: &tri };
+            let positions = vec![Vec3::zeros(), Vec3::x(), Vec3::y()];
+            let o = ObstacleFrame { name: "ball", positions, velocities: None, triangles: &tri };
             frame_samples(mesh, &cloths, &[o])
         };
         std::fs::write(dir.join("a"), frame(&mesh)).unwrap();
@@ -434,6 +443,7 @@ mod tests {
         // UVs in the input's units: material metres / 0.5.
         assert!(text.contains("(2, 2)"), "{text}");
         assert!(text.contains("int[] faceVertexIndices = [0, 1, 2]\n"), "{text}");
+        assert!(text.contains("vector3f[] velocities = [(0, 0, 0), (0, 0, 0), (0, 0, 0)]\n"), "{text}");
         assert_eq!(text.matches('{').count(), text.matches('}').count());
         std::fs::write(dir.join("c"), "junk\n").unwrap();
         assert!(assemble(&mut Vec::new(), &info, &[(1, dir.join("a")), (2, dir.join("c"))]).is_err());

@@ -1,6 +1,8 @@
 //! Reading a run's output directory (for `render` and `compare`): the frames and times listed
 //! in `stats.json`, the frame meshes `frame_NNNN.obj` and the exported obstacles
-//! `obstacle_<name>_NNNN.obj`.
+//! `obstacle_<name>_NNNN.obj` — or, for a run written with `--format usd` (no OBJ frames), each
+//! frame's USD samples `usd_samples/frame_NNNN.txt`, which hold the cloths and the exported
+//! obstacles together (`io::usd_samples`).
 //!
 //! A run numbers its files with at least four digits, more when its frame count needs them
 //! (`sim::run`); the width is found from the files themselves.
@@ -11,6 +13,8 @@ use std::path::{Path, PathBuf};
 use crate::error::InputError;
 use crate::io::obj::read_obj;
 use crate::io::stats::RunStats;
+use crate::io::usd::SAMPLES_DIR;
+use crate::io::usd_samples::read_samples;
 use crate::math::{Real, Vec3};
 
 /// One frame's surfaces, rasterised together: the cloth's triangles first, then the obstacles'.
@@ -71,27 +75,44 @@ pub fn select_frames(
         .collect())
 }
 
-/// Where a run's files are: its directory, the digits of its frame numbers, and the names of
-/// the obstacles it exported.
+/// Where a run's files are: its directory, the digits of its frame numbers, which files hold
+/// its frames, and the names of the obstacles it exported as OBJ.
 #[derive(Clone, Debug)]
 pub struct RunFiles {
     dir: PathBuf,
     digits: usize,
+    source: Source,
     obstacles: Vec<String>,
 }
 
+/// Which files hold a run's frames.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Source {
+    Obj,
+    /// `usd_samples/frame_NNNN.txt` (a `--format usd` run; obstacles are in the same file).
+    /// `true` when the probed frame's file holds obstacles.
+    Usd(bool),
+}
+
 impl RunFiles {
-    /// The digits of the frame numbers from the name of frame `probe`'s OBJ (when it is
-    /// missing, the run's default for a last frame `last`, and `load` reports the file), and
-    /// the exported obstacles from the directory listing.
+    /// The digits of the frame numbers from the name of frame `probe`'s OBJ, or else of its
+    /// USD samples file, which then hold the frames (when neither exists, the run's default for
+    /// a last frame `last` and OBJ frames; `load` reports the missing file), and the exported
+    /// obstacles from the directory listing.
     pub fn scan(dir: &Path, probe: usize, last: usize) -> Result<RunFiles, InputError> {
-        let digits = (4..=20)
-            .find(|&w| dir.join(frame_name(probe, w)).is_file())
-            .unwrap_or_else(|| last.to_string().len().max(4));
+        let obj = (4..=20).find(|&w| dir.join(frame_name(probe, w)).is_file());
+        let usd = (4..=20).find(|&w| samples_path(dir, probe, w).is_file()).filter(|_| obj.is_none());
+        if let Some(digits) = usd {
+            let path = samples_path(dir, probe, digits);
+            let frame = read_samples(&path).map_err(|msg| input_error(&path, msg))?;
+            let source = Source::Usd(!frame.obstacles.is_empty());
+            return Ok(RunFiles { dir: dir.to_path_buf(), digits, source, obstacles: Vec::new() });
+        }
+        let digits = obj.unwrap_or_else(|| last.to_string().len().max(4));
         let entries = std::fs::read_dir(dir).map_err(|e| input_error(dir, format!("cannot list: {e}")))?;
         let obstacles: BTreeSet<String> =
             entries.filter_map(|e| obstacle_name(&e.ok()?.file_name().to_string_lossy(), digits)).collect();
-        Ok(RunFiles { dir: dir.to_path_buf(), digits, obstacles: obstacles.into_iter().collect() })
+        Ok(RunFiles { dir: dir.to_path_buf(), digits, source: Source::Obj, obstacles: obstacles.into_iter().collect() })
     }
 
     /// The digits of the run's frame numbers in its file names.
@@ -99,8 +120,17 @@ impl RunFiles {
         self.digits
     }
 
+    /// The frame's OBJ (also for a USD run: where strips and errors are named).
     pub fn frame_path(&self, frame: usize) -> PathBuf {
         self.dir.join(frame_name(frame, self.digits))
+    }
+
+    /// Whether frame `frame`'s file (OBJ or USD samples) is there.
+    pub fn has_frame(&self, frame: usize) -> bool {
+        match self.source {
+            Source::Obj => self.frame_path(frame).is_file(),
+            Source::Usd(_) => samples_path(&self.dir, frame, self.digits).is_file(),
+        }
     }
 
     fn obstacle_path(&self, name: &str, frame: usize) -> PathBuf {
@@ -114,33 +144,53 @@ impl RunFiles {
 
     /// Whether the run exported obstacle meshes (`--export-obstacles`).
     pub fn has_obstacles(&self) -> bool {
-        !self.obstacles.is_empty()
+        !self.obstacles.is_empty() || self.source == Source::Usd(true)
     }
 
     /// The cloth of `frame` and the obstacles exported for it.
     pub fn load(&self, frame: usize) -> Result<FrameMeshes, InputError> {
-        let mut meshes = FrameMeshes::default();
-        let (x, t) = read_mesh(&self.frame_path(frame))?;
-        meshes.append(x, t);
-        meshes.cloth_triangles = meshes.triangles.len();
-        for name in &self.obstacles {
-            let path = self.obstacle_path(name, frame);
-            if path.is_file() {
-                let (x, t) = read_mesh(&path)?;
-                meshes.append(x, t);
-            }
+        let mut meshes = self.cloth(frame)?;
+        if let Some(o) = self.obstacles(frame)? {
+            meshes.append(o.positions, o.triangles);
         }
         Ok(meshes)
     }
-}
 
-impl RunFiles {
+    /// The cloth of `frame` (every cloth of the run, as one mesh).
+    pub fn cloth(&self, frame: usize) -> Result<FrameMeshes, InputError> {
+        let mut meshes = FrameMeshes::default();
+        match self.source {
+            Source::Obj => {
+                let path = self.frame_path(frame);
+                if !path.is_file() && !samples_path(&self.dir, frame, self.digits).is_file() {
+                    let msg = format!("missing (no OBJ frame, nor {SAMPLES_DIR}/ of a --format usd run)");
+                    return Err(input_error(&path, msg));
+                }
+                let (x, t) = read_mesh(&path)?;
+                meshes.append(x, t);
+            }
+            Source::Usd(_) => {
+                for c in self.samples(frame)?.cloths {
+                    meshes.append(c.positions, c.triangles);
+                }
+            }
+        }
+        meshes.cloth_triangles = meshes.triangles.len();
+        Ok(meshes)
+    }
+
     /// The obstacles the run exported for `frame` (none exported: None).
     pub fn obstacles(&self, frame: usize) -> Result<Option<FrameMeshes>, InputError> {
-        if self.obstacles.is_empty() {
+        if !self.has_obstacles() {
             return Ok(None);
         }
         let mut meshes = FrameMeshes::default();
+        if let Source::Usd(_) = self.source {
+            for o in self.samples(frame)?.obstacles {
+                meshes.append(o.positions, o.triangles);
+            }
+            return Ok(Some(meshes));
+        }
         for name in &self.obstacles {
             let path = self.obstacle_path(name, frame);
             if path.is_file() {
@@ -150,24 +200,46 @@ impl RunFiles {
         }
         Ok(Some(meshes))
     }
+
+    fn samples(&self, frame: usize) -> Result<crate::io::usd_samples::SampledFrame, InputError> {
+        let path = samples_path(&self.dir, frame, self.digits);
+        if !path.is_file() {
+            return Err(input_error(&path, "missing (the run has USD samples, not OBJ frames)"));
+        }
+        read_samples(&path).map_err(|msg| input_error(&path, msg))
+    }
 }
 
-/// The frame numbers of the `frame_NNNN.obj` files in `dir`, ascending (none: an error naming
-/// the directory).
+fn samples_path(dir: &Path, frame: usize, digits: usize) -> PathBuf {
+    dir.join(SAMPLES_DIR).join(format!("frame_{frame:0digits$}.txt"))
+}
+
+/// The frame numbers of the `frame_NNNN.obj` files in `dir`, ascending, or else of its USD
+/// samples files (none: an error naming the directory).
 pub fn frame_numbers(dir: &Path) -> Result<Vec<usize>, InputError> {
+    let mut frames = numbered(dir, ".obj")?;
+    if frames.is_empty() && dir.join(SAMPLES_DIR).is_dir() {
+        frames = numbered(&dir.join(SAMPLES_DIR), ".txt")?;
+    }
+    if frames.is_empty() {
+        let msg = format!("no frame_NNNN.obj files nor {SAMPLES_DIR}/ (expected the output directory of a run)");
+        return Err(input_error(dir, msg));
+    }
+    Ok(frames)
+}
+
+/// The numbers of the `frame_NNNN<ext>` files in `dir`, ascending.
+fn numbered(dir: &Path, ext: &str) -> Result<Vec<usize>, InputError> {
     let entries = std::fs::read_dir(dir).map_err(|e| input_error(dir, format!("cannot list: {e}")))?;
     let mut frames: Vec<usize> = entries
         .filter_map(|e| {
             let name = e.ok()?.file_name().to_string_lossy().into_owned();
-            let number = name.strip_prefix("frame_")?.strip_suffix(".obj")?;
+            let number = name.strip_prefix("frame_")?.strip_suffix(ext)?;
             number.bytes().all(|b| b.is_ascii_digit()).then(|| number.parse().ok())?
         })
         .collect();
     frames.sort_unstable();
     frames.dedup();
-    if frames.is_empty() {
-        return Err(input_error(dir, "no frame_NNNN.obj files (expected the output directory of a run)"));
-    }
     Ok(frames)
 }
 

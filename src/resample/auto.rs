@@ -5,7 +5,7 @@
 //! that metric, looking the metric up again at the new vertices until nothing splits.
 
 use super::locate::Locator;
-use super::{FixedMesh, RunFrame};
+use super::{FixedMesh, ResampleError, RunFrame};
 use crate::math::{Mat2, Real, Vec2, Vec3};
 use crate::mesh::{Face, Mesh, Node, NodeId, Vert, VertId};
 use crate::remesh::{remesh, RemeshLimits};
@@ -31,7 +31,7 @@ fn face_metric(u: [Vec2; 3]) -> Option<Mat2> {
 }
 
 /// The first frame's mesh in material space (texture units), world positions kept.
-fn first_mesh(frame: &RunFrame) -> Result<Mesh, String> {
+fn first_mesh(frame: &RunFrame) -> Result<Mesh, ResampleError> {
     let obj = &frame.obj;
     let mut mesh = Mesh::default();
     for p in &obj.positions {
@@ -53,44 +53,67 @@ fn first_mesh(frame: &RunFrame) -> Result<Mesh, String> {
     for t in &obj.triangles {
         mesh.faces.push(Face { v: t.map(|c| VertId(vert_of_vt[c.vt.unwrap_or(0)])), material: 0 });
     }
-    mesh.rebuild_topology().map_err(|e| format!("frame {}: {e}", frame.number))?;
+    mesh.rebuild_topology().map_err(|e| ResampleError::Auto(format!("frame {}: {e}", frame.number)))?;
     Ok(mesh)
 }
 
-pub fn auto_target(frames: &[RunFrame]) -> Result<FixedMesh, String> {
-    let first = frames.first().ok_or("no frames")?;
-    let mut mesh = first_mesh(first)?;
-    let metrics: Vec<(Locator, Vec<Option<Mat2>>)> = frames
-        .iter()
-        .map(|f| {
-            let uv = |t: &[crate::io::obj::Corner; 3]| t.map(|c| f.obj.texcoords[c.vt.unwrap_or(0)]);
-            (Locator::new(&f.obj), f.obj.triangles.iter().map(|t| face_metric(uv(t))).collect())
-        })
-        .collect();
+/// The fixed mesh of every cloth of a run of `count` frames, `read(k)` giving frame k's cloths
+/// (the same cloths in every frame). Frames are read again at each round rather than held, so a
+/// long run is never all in memory.
+pub fn auto_targets(
+    count: usize,
+    read: &dyn Fn(usize) -> Result<Vec<RunFrame>, ResampleError>,
+) -> Result<Vec<FixedMesh>, ResampleError> {
+    let first = read(0)?;
+    let mut meshes = first.iter().map(first_mesh).collect::<Result<Vec<_>, _>>()?;
+    let mut done = vec![false; meshes.len()];
     let limits = RemeshLimits { size_min: 0.0, aspect_min: 0.2, coarsen: false };
     for _ in 0..ROUNDS {
-        let vsize: Vec<Mat2> = mesh
-            .verts
-            .iter()
-            .map(|v| {
-                metrics.iter().fold(Mat2::zeros(), |m, (locator, ms)| match ms[locator.locate(&v.u).triangle] {
-                    Some(mf) => tensor_max(&[m, mf]),
-                    None => m,
-                })
-            })
-            .collect();
-        let pinned = vec![false; mesh.nodes.len()];
-        let (finished, stats) = remesh(&mesh, vsize, pinned, &limits).map_err(|e| format!("remeshing: {e}"))?;
-        mesh = finished.mesh;
-        if stats.splits == 0 {
+        let mut vsize: Vec<Vec<Mat2>> = meshes.iter().map(|m| vec![Mat2::zeros(); m.verts.len()]).collect();
+        for k in 0..count {
+            let frame = read(k)?;
+            for (c, cloth) in frame.iter().enumerate().filter(|(c, _)| !done[*c]) {
+                refine_sizing(&mut vsize[c], &meshes[c], cloth);
+            }
+        }
+        for (c, mesh) in meshes.iter_mut().enumerate() {
+            if done[c] {
+                continue;
+            }
+            let pinned = vec![false; mesh.nodes.len()];
+            let vs = std::mem::take(&mut vsize[c]);
+            let (finished, stats) =
+                remesh(mesh, vs, pinned, &limits).map_err(|e| ResampleError::Auto(format!("remeshing: {e}")))?;
+            *mesh = finished.mesh;
+            done[c] = stats.splits == 0;
+        }
+        if done.iter().all(|&d| d) {
             break;
         }
     }
+    Ok(meshes.into_iter().map(fixed_mesh).collect())
+}
+
+/// Raises each vertex's sizing `vsize` to the tensor max with the metric of `frame`'s face
+/// holding it.
+fn refine_sizing(vsize: &mut [Mat2], mesh: &Mesh, frame: &RunFrame) {
+    let uv = |t: &[crate::io::obj::Corner; 3]| t.map(|c| frame.obj.texcoords[c.vt.unwrap_or(0)]);
+    let locator = Locator::new(&frame.obj);
+    let metrics: Vec<Option<Mat2>> = frame.obj.triangles.iter().map(|t| face_metric(uv(t))).collect();
+    for (m, v) in vsize.iter_mut().zip(&mesh.verts) {
+        if let Some(mf) = metrics[locator.locate(&v.u).triangle] {
+            *m = tensor_max(&[*m, mf]);
+        }
+    }
+}
+
+/// The refined mesh as a fixed mesh: each node tracked at its first vert's location.
+fn fixed_mesh(mesh: Mesh) -> FixedMesh {
     let mut node_uv: Vec<Option<Vec2>> = vec![None; mesh.nodes.len()];
     for v in &mesh.verts {
         node_uv[v.node.idx()].get_or_insert(v.u);
     }
-    Ok(FixedMesh {
+    FixedMesh {
         texcoords: mesh.verts.iter().map(|v| v.u).collect(),
         node_uv: node_uv.into_iter().map(|u| u.unwrap_or_default()).collect(),
         triangles: (0..mesh.faces.len())
@@ -100,7 +123,7 @@ pub fn auto_target(frames: &[RunFrame]) -> Result<FixedMesh, String> {
                 [(n[0], v[0].idx()), (n[1], v[1].idx()), (n[2], v[2].idx())]
             })
             .collect(),
-    })
+    }
 }
 
 #[cfg(test)]

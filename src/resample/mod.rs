@@ -13,31 +13,46 @@
 //! its edges are no longer, in any frame's sizing, than that frame's own faces, so it is fine
 //! wherever the run ever was.
 //!
-//! Output (in `--out`): `frame_NNNN.obj` per frame (numbered as the run's), `cloth.pc2` (PC2
-//! point cache: every frame's positions, one topology), `cloth.usda` (the faces once, points
-//! and velocities time-sampled) and `resample.json` (target face count beside the run's mean and
-//! max, error per frame).
+//! Every cloth of the run is resampled onto its own fixed mesh (`--mesh` once per cloth, in
+//! the order of the run's `o` groups, or `--auto` for all); the outputs hold them all, as the
+//! run's frames do.
+//!
+//! Output (in `--out`): `frame_NNNN.obj` per frame (numbered as the run's; one `o` group per
+//! cloth when there are several), `cloth.pc2` (PC2 point cache: every frame's positions, the
+//! cloths' one after the other, one topology), `cloth.usda` (a prim per cloth: the faces once,
+//! points and velocities time-sampled) and `resample.json` (target face count beside the run's
+//! mean and max, error per frame).
+//!
+//! The run is streamed: `--auto` reads the frames once per refinement round, and the
+//! resampling reads, places and writes one frame at a time (the PC2 cache is appended to as it
+//! goes), so memory holds one frame and the fixed meshes, however long the shot.
 
 mod auto;
+mod frames;
 mod locate;
+mod write;
 
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
 
 use crate::error::InputError;
+use std::io::Write as _;
+
 use crate::io::obj::{read_obj, ObjData};
 use crate::io::usd::{self, StageInfo};
 use crate::io::{write_atomic, write_atomic_with};
 use crate::math::{Real, Vec2, Vec3};
-use crate::metrics::geometric::{surface_distance, Surface};
 use crate::render::run_dir::{read_stats, RunFiles};
 use locate::Locator;
+pub use write::pc2_bytes;
+use write::{pc2_header, pc2_points, OutFiles};
 
-/// Where the fixed mesh comes from.
+/// Where the fixed meshes come from.
 pub enum Target {
-    /// An OBJ whose `vt` are material locations in the run's texture units.
-    Mesh(PathBuf),
+    /// One OBJ per cloth, in cloth order, whose `vt` are material locations in the run's
+    /// texture units.
+    Meshes(Vec<PathBuf>),
     /// Made from the run's own meshes (`auto`).
     Auto,
 }
@@ -48,6 +63,16 @@ pub enum ResampleError {
     Input(InputError),
     #[error("{path}: {source}")]
     Io { path: PathBuf, source: std::io::Error },
+    /// `--auto` could not mesh the run.
+    #[error("--auto: {0}")]
+    Auto(String),
+}
+
+/// For `write_atomic_with`: an I/O error of the file it writes (the caller names it).
+impl From<std::io::Error> for ResampleError {
+    fn from(source: std::io::Error) -> Self {
+        ResampleError::Io { path: PathBuf::new(), source }
+    }
 }
 
 impl From<InputError> for ResampleError {
@@ -78,7 +103,19 @@ pub struct ResampleReport {
     /// Largest distance of a target vertex outside the material domain of some frame (the
     /// vertex was placed on the nearest point of the domain), in texture units.
     pub max_outside: Real,
+    /// Per cloth, when the run has several (`vertices` and `faces` above are their sums).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub cloths: Vec<ClothReport>,
     pub frames: Vec<FrameError>,
+}
+
+/// One cloth's fixed mesh.
+#[derive(Clone, Debug, Serialize)]
+pub struct ClothReport {
+    pub name: String,
+    pub target: String,
+    pub vertices: usize,
+    pub faces: usize,
 }
 
 /// The fixed mesh: node positions of its source, and per corner the node and texture index.
@@ -89,7 +126,7 @@ pub struct FixedMesh {
     pub triangles: Vec<[(usize, usize); 3]>,
 }
 
-/// One frame of the run, as read from its OBJ.
+/// One cloth at one frame of the run, as read from its OBJ.
 pub struct RunFrame {
     pub number: usize,
     pub time: Real,
@@ -100,36 +137,6 @@ pub struct RunFrame {
 
 fn input_error(file: &Path, msg: impl Into<String>) -> ResampleError {
     ResampleError::Input(InputError { file: file.to_path_buf(), location: None, msg: msg.into() })
-}
-
-/// Reads frame `number` of the run: positions, faces with texture coordinates, and `nv`.
-fn read_frame(files: &RunFiles, number: usize, time: Real) -> Result<RunFrame, ResampleError> {
-    let path = files.frame_path(number);
-    let obj = read_obj(&path).map_err(|msg| input_error(&path, msg))?;
-    if obj.triangles.iter().any(|t| t[0].vt.is_none()) {
-        return Err(input_error(&path, "faces without texture coordinates (not a viewcloth frame?)"));
-    }
-    let text = std::fs::read_to_string(&path).map_err(|source| ResampleError::Io { path: path.clone(), source })?;
-    if text.lines().filter(|l| l.starts_with("o ")).count() > 1 {
-        return Err(input_error(
-            &path,
-            "the run has several cloths; resample tracks one cloth (expected one 'o' group)",
-        ));
-    }
-    let mut velocities = Vec::new();
-    for (k, l) in text.lines().enumerate().filter(|(_, l)| l.starts_with("nv ")) {
-        let c: Vec<Real> = l[3..].split_whitespace().filter_map(|w| w.parse().ok()).collect();
-        if c.len() != 3 {
-            return Err(input_error(&path, format!("line {}: 'nv' needs 3 numbers", k + 1)));
-        }
-        velocities.push(Vec3::new(c[0], c[1], c[2]));
-    }
-    let velocities = match velocities.len() {
-        0 => None,
-        n if n == obj.positions.len() => Some(velocities),
-        n => return Err(input_error(&path, format!("{n} 'nv' lines for {} vertices", obj.positions.len()))),
-    };
-    Ok(RunFrame { number, time, obj, velocities })
 }
 
 /// The fixed mesh of an OBJ with texture coordinates on every face.
@@ -161,56 +168,56 @@ pub fn resample(run_dir: &Path, target: &Target, out: &Path) -> Result<ResampleR
         return Err(input_error(&run_dir.join("stats.json"), "lists no frames"));
     };
     let files = RunFiles::scan(run_dir, first.frame, last.frame)?;
-    let frames = stats.frames.iter().map(|f| read_frame(&files, f.frame, f.time)).collect::<Result<Vec<_>, _>>()?;
-    let fixed = match target {
-        Target::Mesh(path) => mesh_target(path)?,
-        Target::Auto => auto::auto_target(&frames).map_err(|msg| input_error(run_dir, msg))?,
+    let names: Vec<String> = frames::read_frame(&files, first.frame, first.time)?.into_iter().map(|c| c.0).collect();
+    let read = |k: usize| -> Result<Vec<RunFrame>, ResampleError> {
+        let f = &stats.frames[k];
+        let cloths = frames::read_frame(&files, f.frame, f.time)?;
+        if cloths.len() != names.len() || cloths.iter().zip(&names).any(|(c, n)| c.0 != *n) {
+            let msg = format!("its cloths ('o' groups) differ from frame {}'s: {names:?}", first.frame);
+            return Err(input_error(&files.frame_path(f.frame), msg));
+        }
+        Ok(cloths.into_iter().map(|c| c.1).collect())
     };
-    std::fs::create_dir_all(out.join(usd::SAMPLES_DIR))
-        .map_err(|source| ResampleError::Io { path: out.into(), source })?;
-    let digits = files.digits();
-    let triangles: Vec<[usize; 3]> = fixed.triangles.iter().map(|t| t.map(|c| c.0)).collect();
-    let st_indices: Vec<[usize; 3]> = fixed.triangles.iter().map(|t| t.map(|c| c.1)).collect();
+    let fixed = targets(target, &names, stats.frames.len(), &read, run_dir)?;
+    std::fs::create_dir_all(out.join(usd::SAMPLES_DIR)).map_err(io(out))?;
     let mut report = ResampleReport {
         run: run_dir.to_path_buf(),
         target: match target {
-            Target::Mesh(p) => p.display().to_string(),
+            Target::Meshes(p) => p.iter().map(|p| p.display().to_string()).collect::<Vec<_>>().join(", "),
             Target::Auto => "auto".into(),
         },
-        vertices: fixed.node_uv.len(),
-        faces: fixed.triangles.len(),
+        vertices: fixed.iter().map(|f| f.node_uv.len()).sum(),
+        faces: fixed.iter().map(|f| f.triangles.len()).sum(),
         run_mean_faces: stats.frames.iter().map(|f| f.faces as Real).sum::<Real>() / stats.frames.len() as Real,
         run_max_faces: stats.frames.iter().map(|f| f.faces).max().unwrap_or(0),
         max_outside: 0.0,
+        cloths: cloth_reports(&names, &fixed, target),
         frames: Vec::new(),
     };
-    let mut cache: Vec<Vec<Vec3>> = Vec::with_capacity(frames.len());
-    let mut samples = Vec::with_capacity(frames.len());
-    for frame in &frames {
-        let (x, v, outside) = place(&fixed, frame);
-        report.max_outside = report.max_outside.max(outside);
-        let run_tris: Vec<[usize; 3]> = frame.obj.triangles.iter().map(|t| t.map(|c| c.v)).collect();
-        let d = surface_distance(
-            Surface { positions: &x, triangles: &triangles, weight: None },
-            Surface { positions: &frame.obj.positions, triangles: &run_tris, weight: None },
-        );
-        report.frames.push(FrameError { frame: frame.number, time: frame.time, mean: d.mean, max: d.max });
-        let obj_path = out.join(format!("frame_{:0digits$}.obj", frame.number));
-        write_atomic(&obj_path, fixed_obj(&fixed, &x).as_bytes()).map_err(io(&obj_path))?;
-        let sample_path = out.join(usd::SAMPLES_DIR).join(format!("frame_{:0digits$}.txt", frame.number));
-        let velocities = (!v.is_empty()).then_some(&v[..]);
-        let text =
-            usd::fixed_samples("/World/cloth/resampled", &x, velocities, &triangles, &fixed.texcoords, &st_indices);
-        write_atomic(&sample_path, text.as_bytes()).map_err(io(&sample_path))?;
-        samples.push((frame.number, sample_path));
-        cache.push(x);
-    }
-    let fps = match frames.as_slice() {
-        [a, b, ..] if b.time > a.time => 1.0 / ((b.time - a.time) / (b.number - a.number) as Real),
+    let out_files = OutFiles::new(&names, &fixed, files.digits());
+    let pc2 = out.join("cloth.pc2");
+    let mut samples = Vec::with_capacity(stats.frames.len());
+    write_atomic_with(&pc2, |f| {
+        let points = report.vertices;
+        f.write_all(&pc2_header(points, stats.frames.len(), first.frame as f32, 1.0)).map_err(io(&pc2))?;
+        for k in 0..stats.frames.len() {
+            let cloths = read(k)?;
+            let placed = out_files.write_frame(out, &cloths, &mut report)?;
+            f.write_all(&pc2_points(&placed)).map_err(io(&pc2))?;
+            samples.push((cloths[0].number, out_files.samples_path(out, cloths[0].number)));
+        }
+        Ok(())
+    })
+    .map_err(|e| match e {
+        ResampleError::Io { path, source } if path.as_os_str().is_empty() => {
+            ResampleError::Io { path: pc2.clone(), source }
+        }
+        e => e,
+    })?;
+    let fps = match stats.frames.as_slice() {
+        [a, b, ..] if b.time > a.time => 1.0 / ((b.time - a.time) / (b.frame - a.frame) as Real),
         _ => 25.0,
     };
-    let pc2 = out.join("cloth.pc2");
-    write_atomic(&pc2, &pc2_bytes(&cache, first.frame as f32, 1.0)).map_err(io(&pc2))?;
     let info = StageInfo { scene: stats.scene.clone(), fps, start: first.frame, end: last.frame };
     let layer = out.join("cloth.usda");
     write_atomic_with(&layer, |f| usd::assemble(f, &info, &samples)).map_err(|e| match e {
@@ -224,9 +231,54 @@ pub fn resample(run_dir: &Path, target: &Target, out: &Path) -> Result<ResampleR
     Ok(report)
 }
 
+/// The fixed mesh of each cloth (`names`, in the run's order).
+fn targets(
+    target: &Target,
+    names: &[String],
+    count: usize,
+    read: &dyn Fn(usize) -> Result<Vec<RunFrame>, ResampleError>,
+    run_dir: &Path,
+) -> Result<Vec<FixedMesh>, ResampleError> {
+    match target {
+        Target::Auto => auto::auto_targets(count, read).map_err(|e| match e {
+            ResampleError::Auto(msg) => input_error(run_dir, msg),
+            e => e,
+        }),
+        Target::Meshes(paths) if paths.len() != names.len() => Err(ResampleError::Input(InputError {
+            file: run_dir.to_path_buf(),
+            location: Some("--mesh".into()),
+            msg: format!(
+                "given {} time(s) for a run of {} cloth(s) ({}): give one --mesh per cloth, in this order, or --auto",
+                paths.len(),
+                names.len(),
+                names.join(", ")
+            ),
+        })),
+        Target::Meshes(paths) => paths.iter().map(|p| mesh_target(p)).collect(),
+    }
+}
+
+fn cloth_reports(names: &[String], fixed: &[FixedMesh], target: &Target) -> Vec<ClothReport> {
+    if names.len() <= 1 {
+        return Vec::new();
+    }
+    let target = |c: usize| match target {
+        Target::Meshes(p) => p[c].display().to_string(),
+        Target::Auto => "auto".into(),
+    };
+    let each = names.iter().zip(fixed).enumerate();
+    each.map(|(c, (name, f))| ClothReport {
+        name: name.clone(),
+        target: target(c),
+        vertices: f.node_uv.len(),
+        faces: f.triangles.len(),
+    })
+    .collect()
+}
+
 /// The fixed mesh's nodes placed on `frame`: positions, velocities (when the frame has them)
 /// and how far outside the frame's material domain a node was (texture units).
-fn place(fixed: &FixedMesh, frame: &RunFrame) -> (Vec<Vec3>, Vec<Vec3>, Real) {
+pub(super) fn place(fixed: &FixedMesh, frame: &RunFrame) -> (Vec<Vec3>, Vec<Vec3>, Real) {
     let locator = Locator::new(&frame.obj);
     let (mut x, mut v, mut outside) = (Vec::with_capacity(fixed.node_uv.len()), Vec::new(), 0.0);
     for uv in &fixed.node_uv {
@@ -242,43 +294,6 @@ fn place(fixed: &FixedMesh, frame: &RunFrame) -> (Vec<Vec3>, Vec<Vec3>, Real) {
     (x, v, outside)
 }
 
-fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ResampleError + '_ {
+pub(super) fn io(path: &Path) -> impl FnOnce(std::io::Error) -> ResampleError + '_ {
     move |source| ResampleError::Io { path: path.to_path_buf(), source }
-}
-
-/// A resampled frame as OBJ: `v` per fixed node, the fixed `vt`, `f v/vt`.
-fn fixed_obj(fixed: &FixedMesh, x: &[Vec3]) -> String {
-    use std::fmt::Write as _;
-    let mut s = String::from("# viewcloth resampled frame\n");
-    for p in x {
-        let _ = writeln!(s, "v {:.9} {:.9} {:.9}", p.x, p.y, p.z);
-    }
-    for u in &fixed.texcoords {
-        let _ = writeln!(s, "vt {:.9} {:.9}", u.x, u.y);
-    }
-    for t in &fixed.triangles {
-        let _ =
-            writeln!(s, "f {}/{} {}/{} {}/{}", t[0].0 + 1, t[0].1 + 1, t[1].0 + 1, t[1].1 + 1, t[2].0 + 1, t[2].1 + 1);
-    }
-    s
-}
-
-/// A PC2 point cache (Blender's and 3ds Max's format): `POINTCACHE2\0`, version 1, point count,
-/// start frame, sample rate, sample count (little endian), then every sample's points as
-/// 32-bit float triples.
-pub fn pc2_bytes(frames: &[Vec<Vec3>], start: f32, rate: f32) -> Vec<u8> {
-    let points = frames.first().map_or(0, Vec::len);
-    let mut b = Vec::with_capacity(32 + frames.len() * points * 12);
-    b.extend_from_slice(b"POINTCACHE2\0");
-    b.extend_from_slice(&1i32.to_le_bytes());
-    b.extend_from_slice(&(points as i32).to_le_bytes());
-    b.extend_from_slice(&start.to_le_bytes());
-    b.extend_from_slice(&rate.to_le_bytes());
-    b.extend_from_slice(&(frames.len() as i32).to_le_bytes());
-    for p in frames.iter().flatten() {
-        for c in [p.x, p.y, p.z] {
-            b.extend_from_slice(&(c as f32).to_le_bytes());
-        }
-    }
-    b
 }

@@ -76,7 +76,9 @@ impl Output<'_> {
                         let text = obstacle_obj(&positions, body.triangles());
                         write_atomic(&path, text.as_bytes()).map_err(io_err(&path))?;
                     }
-                    obstacles.push(ObstacleFrame { name: &obstacle.name, positions, triangles: body.triangles() });
+                    let velocities = (!body.is_static()).then(|| obstacle_velocities(body, sim));
+                    let triangles = body.triangles();
+                    obstacles.push(ObstacleFrame { name: &obstacle.name, positions, velocities, triangles });
                 }
             }
         }
@@ -149,8 +151,8 @@ impl Output<'_> {
         wall_before: f64,
     ) -> Result<RunStats, RunError> {
         let started = Instant::now();
-        let mut report = Reporter::start(progress, &sim.scene.name, first, last);
-        (report.start_frame, report.preroll) = (sim.scene.start_frame, sim.scene.preroll_frames);
+        let scene = &sim.scene;
+        let report = Reporter::start(progress, &scene.name, (first, last), scene.start_frame, scene.preroll_frames);
         for k in first..=last {
             let clock = Instant::now();
             if k > 0 {
@@ -251,6 +253,16 @@ impl Output<'_> {
         self.write_usd(sim, k)?;
         Err(RunError::Interrupted { dir: self.dir.to_path_buf(), at, checkpoint })
     }
+}
+
+/// An obstacle's vertex velocities at the frame just simulated: its displacement over the last
+/// step, (x(t) − x(t − h)) / h. The scripted motion has no analytic derivative in the code, and
+/// this is the velocity the step gave it (collision handling, `ObstacleBody::velocities`), as
+/// the cloth's written velocities are its end-of-step ones, so cloth carried by an obstacle
+/// moves with it in a renderer's motion blur.
+fn obstacle_velocities(body: &crate::collision::obstacle::ObstacleBody, sim: &Simulation) -> Vec<crate::math::Vec3> {
+    let (t, h) = (sim.state.time, sim.scene.time_step());
+    body.velocities(t - h, t)
 }
 
 /// The wall time of the last frame recorded.

@@ -63,14 +63,20 @@ pub(super) struct Reporter {
     started: Instant,
     first: usize,
     last: usize,
-    /// The number of the first written frame and the frames simulated before it: lines name
-    /// frames as their files do.
-    pub(super) start_frame: usize,
-    pub(super) preroll: usize,
+    start_frame: usize,
+    preroll: usize,
 }
 
 impl Reporter {
-    pub(super) fn start(p: &Progress, scene_name: &str, first: usize, last: usize) -> Reporter {
+    /// `start_frame` is the number of the first written frame and `preroll` the frames
+    /// simulated before it: the bar and the lines name frames as their files do.
+    pub(super) fn start(
+        p: &Progress,
+        scene_name: &str,
+        (first, last): (usize, usize),
+        start_frame: usize,
+        preroll: usize,
+    ) -> Reporter {
         let label = p.label.clone().unwrap_or_else(|| scene_name.to_string());
         let bar = (p.mode == ProgressMode::Bar).then(|| {
             let bar = indicatif::ProgressBar::new(last as u64);
@@ -78,23 +84,36 @@ impl Reporter {
                 Some(multi) => multi.add(bar),
                 None => bar,
             };
+            // No {pos}/{len}: they count from the run's start, preroll included; the message
+            // names the frame by its file number, as the lines do.
             bar.set_style(
-                indicatif::ProgressStyle::with_template(
-                    "{msg} [{bar:40}] {pos}/{len} frames, {elapsed} elapsed, ETA {eta}",
-                )
-                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+                indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {elapsed} elapsed, ETA {eta}")
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
             );
-            bar.set_message(label.clone());
             bar.set_position(first as u64);
             bar
         });
-        Reporter { mode: p.mode, label, bar, started: Instant::now(), first, last, start_frame: 0, preroll: 0 }
+        let r = Reporter { mode: p.mode, label, bar, started: Instant::now(), first, last, start_frame, preroll };
+        if let Some(bar) = &r.bar {
+            bar.set_message(format!("{}: {}", r.label, r.frame_name(first)));
+        }
+        r
+    }
+
+    /// Frame `f` (counted from the run's start) as its file is numbered: `frame 1005/1030`, or
+    /// `preroll frame 3/10`.
+    fn frame_name(&self, f: usize) -> String {
+        match f.checked_sub(self.preroll) {
+            Some(w) => format!("frame {}/{}", self.start_frame + w, self.start_frame + self.last - self.preroll),
+            None => format!("preroll frame {f}/{}", self.preroll),
+        }
     }
 
     /// Frame `f` is written; it took `wall_s` and has `faces` faces.
     pub(super) fn frame(&self, f: usize, wall_s: f64, faces: usize) {
         if let Some(bar) = &self.bar {
             bar.set_position(f as u64);
+            bar.set_message(format!("{}: {}", self.label, self.frame_name(f)));
         }
         if self.mode != ProgressMode::Lines {
             return;
@@ -103,11 +122,7 @@ impl Reporter {
         let mean = self.started.elapsed().as_secs_f64() / done as f64;
         let eta = mean * (self.last - f) as f64;
         // eprintln writes unbuffered: the line is in the log when the frame is on disk.
-        let frame = match f.checked_sub(self.preroll) {
-            Some(w) => format!("frame {}/{}", self.start_frame + w, self.start_frame + self.last - self.preroll),
-            None => format!("preroll frame {f}/{}", self.preroll),
-        };
-        eprintln!("{}: {frame}, {wall_s:.2} s/frame, {faces} faces, ETA {}", self.label, clock(eta));
+        eprintln!("{}: {}, {wall_s:.2} s/frame, {faces} faces, ETA {}", self.label, self.frame_name(f), clock(eta));
     }
 
     pub(super) fn finish(self) {
@@ -129,6 +144,17 @@ fn clock(s: f64) -> String {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
+    #[test]
+    fn frames_are_named_as_their_files() {
+        let p = Progress::new(ProgressMode::None);
+        let r = Reporter::start(&p, "shot", (0, 32), 1001, 2);
+        assert_eq!(r.frame_name(1), "preroll frame 1/2");
+        assert_eq!(r.frame_name(2), "frame 1001/1031");
+        assert_eq!(r.frame_name(32), "frame 1031/1031");
+    }
+
     #[test]
     fn clock_reads_as_hours_minutes_seconds() {
         assert_eq!(super::clock(3.4), "3s");

@@ -4,7 +4,8 @@ holding `usd-core`) and checks it against what the run wrote in its OBJ frames.
 usage: check.py LAYER EXPECTED.json
 
 EXPECTED.json: {"start": 1001, "end": 1005, "fps": 25, "cloth": "/World/cloth/sheet",
-"obstacles": ["/World/obstacles/sphere"], "frames": {"1001": {"points": [[x, y, z], ...],
+"obstacles": ["/World/obstacles/sphere"],
+"obstacle_velocities": {"/World/obstacles/sphere": [vx, vy, vz]} (optional: every point's velocity at every time), "frames": {"1001": {"points": [[x, y, z], ...],
 "velocities": [...] (optional: else only counted), "faces": [[a, b, c], ...], "uvs": [[[u, v] x 3], ...]}, ...}}
 
 Prints one line per check; exits 1 at the first failure, saying what differed.
@@ -90,6 +91,12 @@ def main():
         if not valid or len(body.GetPointsAttr().GetTimeSamples()) != len(want_codes):
             fail(f"{path}: {why or 'time samples'}")
         print(f"ok: {path}: {n} points at every time code, topology valid")
+        want = expected.get("obstacle_velocities", {}).get(path)
+        if want is not None:
+            for code in range(expected["start"], expected["end"] + 1):
+                got = body.GetVelocitiesAttr().Get(code)
+                close(got, [want] * n, f"{path}: time {code}: velocities")
+            print(f"ok: {path}: every point's velocity {tuple(want)} at every time code")
 
 
 main()
