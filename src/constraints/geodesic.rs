@@ -8,7 +8,7 @@
 //!
 //! - along an edge: d(q) ≤ d(n) + |u_q − u_n| (the plain graph distance; alone it overestimates
 //!   straight paths that cross edges: 8–14% over on the test grids);
-//! - across a face with two finalised corners a, b (the triangle update of fast marching on
+//! - across a face with two finalised corners a, b reached from the same source (the triangle update of fast marching on
 //!   triangulated domains, Kimmel & Sethian 1998, in its "virtual source" form): the point s at
 //!   distances d(a), d(b) from a and b, on the far side of ab from the third corner c, is where a
 //!   straight front from a single source would come from; when the segment s→c crosses ab,
@@ -114,11 +114,13 @@ pub fn distance_field(mesh: &Mesh, node_faces: &NodeFaces, sources: &[usize], re
                 let mut best = (d + (uq - ua).norm(), source[a]);
                 // The other corner, when finalised, with `a` spans the edge the front crosses.
                 let (b, ub) = (nodes[(k + 3 - j) % 3], uv[(k + 3 - j) % 3]);
-                if refine && done[b] {
+                // Only a front from one source has a virtual source: across the boundary
+                // between two sources' regions the circles meet at a point near neither, and the
+                // update would undercut both distances.
+                if refine && done[b] && source[b] == source[a] {
                     if let Some(t) = triangle_update(ua, d, ub, dist[b], uq) {
                         if t < best.0 {
-                            let s = if d <= dist[b] { source[a] } else { source[b] };
-                            best = (t, s);
+                            best = (t, source[a]);
                         }
                     }
                 }
@@ -187,6 +189,67 @@ pub fn vert_charts(mesh: &Mesh) -> Vec<u32> {
     (0..mesh.verts.len()).map(|i| root(&mut parent, i) as u32).collect()
 }
 
+/// The boundary of each chart in material space (edges of one face: the pattern's outline and
+/// both sides of every seam), to test whether a straight segment stays on the cloth.
+pub struct Outline {
+    /// Per chart, its boundary segments.
+    segments: Vec<Vec<(Vec2, Vec2)>>,
+}
+
+impl Outline {
+    pub fn new(mesh: &Mesh, charts: &[u32]) -> Outline {
+        let mut count = std::collections::HashMap::new();
+        for f in &mesh.faces {
+            for k in 0..3 {
+                let (a, b) = (f.v[k].0, f.v[(k + 1) % 3].0);
+                *count.entry((a.min(b), a.max(b))).or_insert(0u32) += 1;
+            }
+        }
+        let mut segments = vec![Vec::new(); mesh.verts.len()];
+        let mut edges: Vec<_> = count.into_iter().filter(|&(_, c)| c == 1).map(|(e, _)| e).collect();
+        edges.sort_unstable();
+        for (a, b) in edges {
+            segments[charts[a as usize] as usize].push((mesh.verts[a as usize].u, mesh.verts[b as usize].u));
+        }
+        Outline { segments }
+    }
+
+    /// Whether the segment p → q (both in `chart`) stays on the chart: no boundary edge crosses
+    /// it and no boundary vertex lies inside it (conservative: a segment grazing a corner or
+    /// running along the outline is refused), and its midpoint is inside the chart (a segment
+    /// between two outline points can span a gap without touching anything else).
+    pub fn sees(&self, chart: u32, p: Vec2, q: Vec2) -> bool {
+        let orient = |a: Vec2, b: Vec2, c: Vec2| crate::math::cross2(&(b - a), &(c - a));
+        let d = q - p;
+        let len2 = d.norm_squared();
+        let eps = 1e-12 * len2.max(1e-300);
+        let (lo, hi) = (p.inf(&q), p.sup(&q));
+        let strictly_inside = |a: Vec2| {
+            let t = (a - p).dot(&d) / len2;
+            orient(p, q, a).abs() <= eps && t > 1e-9 && t < 1.0 - 1e-9
+        };
+        let segs = &self.segments[chart as usize];
+        let blocked = segs.iter().any(|&(a, b)| {
+            if a.x.max(b.x) < lo.x || a.x.min(b.x) > hi.x || a.y.max(b.y) < lo.y || a.y.min(b.y) > hi.y {
+                return false;
+            }
+            let (d1, d2) = (orient(p, q, a), orient(p, q, b));
+            let (d3, d4) = (orient(a, b, p), orient(a, b, q));
+            (d1 * d2 < 0.0 && d3 * d4 < 0.0) || strictly_inside(a) || strictly_inside(b)
+        });
+        if blocked {
+            return false;
+        }
+        // Parity of a ray from the midpoint towards +x.
+        let m = 0.5 * (p + q);
+        let crossings = segs
+            .iter()
+            .filter(|&&(a, b)| (a.y > m.y) != (b.y > m.y) && m.x < a.x + (m.y - a.y) * (b.x - a.x) / (b.y - a.y))
+            .count();
+        crossings % 2 == 1
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -243,10 +306,11 @@ mod tests {
                 return -1.0;
             }
             // Visible when the segment stays left of x = 0.5 above y = 0.5.
-            let visible = p.x <= 0.5 || p.y <= 0.5 && {
-                let t = (0.5 - s.x) / (p.x - s.x);
-                s.y + t * (p.y - s.y) <= 0.5
-            };
+            let visible = p.x <= 0.5
+                || p.y <= 0.5 && {
+                    let t = (0.5 - s.x) / (p.x - s.x);
+                    s.y + t * (p.y - s.y) <= 0.5
+                };
             if visible {
                 (p - s).norm()
             } else {

@@ -18,7 +18,7 @@
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
 
-use super::geodesic::{distance_field, vert_charts, Field, NodeFaces};
+use super::geodesic::{distance_field, vert_charts, Field, NodeFaces, Outline};
 
 /// How rest lengths are measured in material space.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -109,9 +109,9 @@ impl Lra {
             }
             v
         };
-        let euclid = params.iter().flatten().any(|p| p.distance == Distance::Euclidean);
-        let charts = if euclid { vert_charts(mesh) } else { Vec::new() };
-        let node_verts = if euclid { node_verts(mesh) } else { Vec::new() };
+        let charts = vert_charts(mesh);
+        let node_verts = node_verts(mesh);
+        let outline = Outline::new(mesh, &charts);
         // Per island: the closest attachment (geodesic) of every node, and its distance.
         let fields: Vec<(Vec<usize>, Field)> = islands
             .iter()
@@ -135,7 +135,15 @@ impl Lra {
                 }
                 let geo = (field.dist[k], field.source[k]);
                 let pick = match p.distance {
-                    Distance::Geodesic => geo,
+                    // Where the straight segment to that attachment stays on the chart, it is
+                    // the geodesic: exact on convex panels whatever the mesh.
+                    Distance::Geodesic => {
+                        let s = geo.1 as usize;
+                        match visible_distance(mesh, &charts, &node_verts, &outline, k, s) {
+                            Some(d) if d < geo.0 => (d, geo.1),
+                            _ => geo,
+                        }
+                    }
                     Distance::Euclidean => sources
                         .iter()
                         .filter(|&&s| mesh.nodes[s].cloth == node.cloth)
@@ -227,6 +235,30 @@ fn chart_distance(mesh: &Mesh, charts: &[u32], node_verts: &[Vec<u32>], a: usize
         for &vb in &node_verts[b] {
             if charts[va as usize] == charts[vb as usize] {
                 let d = (mesh.verts[va as usize].u - mesh.verts[vb as usize].u).norm();
+                best = Some(best.map_or(d, |x: Real| x.min(d)));
+            }
+        }
+    }
+    best
+}
+
+/// The straight material distance between nodes `a` and `b` through a pair of their verts in
+/// one chart whose segment stays inside it.
+fn visible_distance(
+    mesh: &Mesh,
+    charts: &[u32],
+    node_verts: &[Vec<u32>],
+    outline: &Outline,
+    a: usize,
+    b: usize,
+) -> Option<Real> {
+    let mut best: Option<Real> = None;
+    for &va in &node_verts[a] {
+        for &vb in &node_verts[b] {
+            let c = charts[va as usize];
+            let (p, q) = (mesh.verts[va as usize].u, mesh.verts[vb as usize].u);
+            if c == charts[vb as usize] && outline.sees(c, p, q) {
+                let d = (p - q).norm();
                 best = Some(best.map_or(d, |x: Real| x.min(d)));
             }
         }

@@ -15,9 +15,13 @@ use crate::math::{eigen_sym2, Mat2, Real, Vec2, Vec3};
 use crate::mesh::Mesh;
 
 /// Largest principal stretch outside the limits at which the projection stops.
-pub const TOLERANCE: Real = 1e-4;
+pub const TOLERANCE: Real = 1e-3;
+/// How far inside the limits a projected face is aimed.
+const MARGIN: Real = 0.5 * TOLERANCE;
+/// Over-relaxation of each face's correction.
+const OMEGA: Real = 1.0;
 /// Sweeps over the faces per step at most.
-pub const MAX_SWEEPS: usize = 60;
+pub const MAX_SWEEPS: usize = 100;
 
 /// What one strain-limiting projection did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -58,8 +62,9 @@ pub fn limit_strain(
     moved: &mut [bool],
 ) -> StrainLimitReport {
     let mut report = StrainLimitReport::default();
-    let faces: Vec<usize> =
-        (0..mesh.faces.len()).filter(|&f| limits.get(mesh.faces[f].material as usize).is_some_and(|l| l.is_some())).collect();
+    let faces: Vec<usize> = (0..mesh.faces.len())
+        .filter(|&f| limits.get(mesh.faces[f].material as usize).is_some_and(|l| l.is_some()))
+        .collect();
     for _ in 0..MAX_SWEEPS {
         let mut worst: Real = 0.0;
         report.sweeps += 1;
@@ -74,7 +79,10 @@ pub fn limit_strain(
                 continue;
             }
             worst = worst.max(e);
-            let scale = Vec2::new(s[0].clamp(lim[0], lim[1]) / s[0], s[1].clamp(lim[0], lim[1]) / s[1]);
+            // Aim a little inside the limits, so that a neighbour's projection does not put the
+            // face straight back outside them.
+            let (lo, hi) = (lim[0] + MARGIN, lim[1] - MARGIN);
+            let scale = Vec2::new(s[0].clamp(lo, hi) / s[0], s[1].clamp(lo, hi) / s[1]);
             let g = fm * (v * Mat2::from_diagonal(&scale) * v.transpose());
             // Target shape relative to corner 0: x_j − x_0 = G (u_j − u_0), i.e. G D_m e_j.
             let dm = rest[f].dm_inv.try_inverse().unwrap_or_else(Mat2::zeros);
@@ -92,7 +100,7 @@ pub fn limit_strain(
             };
             for j in 0..3 {
                 if inv_mass[nodes[j]] > 0.0 {
-                    x[nodes[j]] = c + shape[j];
+                    x[nodes[j]] += OMEGA * (c + shape[j] - xs[j]);
                     moved[nodes[j]] = true;
                 }
             }

@@ -145,7 +145,7 @@ impl Simulation {
     }
 
     /// The frame's constraint measurements into `fs`, resetting the frame's tallies.
-    pub(super) fn constraint_stats(&mut self, fs: &mut FrameStats) {
+    pub fn constraint_stats(&mut self, fs: &mut FrameStats) {
         let x = self.state.mesh.positions();
         let Some(c) = &mut self.ws.constraints else { return };
         if let Some(stage) = &mut c.lra {

@@ -4,9 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use super::material::resolve;
-use super::spec::{
-    ClothSpec, CollisionSpec, HandleSpec, KeyframeSpec, LraSpec, MotSpec, SceneSpec, TransformSpec,
-};
+use super::spec::{ClothSpec, CollisionSpec, HandleSpec, KeyframeSpec, LraSpec, MotSpec, SceneSpec, TransformSpec};
 use super::{Cloth, FollowObstacle, Handle, Scene};
 use crate::camera::Camera;
 use crate::collision::params::CollisionParams;
@@ -411,16 +409,9 @@ fn add_cloth(ctx: &Ctx, scene: &mut Scene, c: usize, cs: &ClothSpec) -> Res<()> 
     }
     let remesh = cs.remesh.as_ref().map(|r| remesh_params(ctx, &format!("{path}.remesh"), r)).transpose()?;
     let lra = cs.lra.as_ref().map(|l| lra_params(ctx, &format!("{path}.lra"), l)).transpose()?;
-    let strain_limits = cs.strain_limits.map(|l| strain_limits(ctx, &format!("{path}.strain_limits"), l)).transpose()?;
-    scene.cloths.push(Cloth {
-        name,
-        material: scene.materials.len(),
-        remesh,
-        flat_rest,
-        uv_unit,
-        lra,
-        strain_limits,
-    });
+    let strain_limits =
+        cs.strain_limits.map(|l| strain_limits(ctx, &format!("{path}.strain_limits"), l)).transpose()?;
+    scene.cloths.push(Cloth { name, material: scene.materials.len(), remesh, flat_rest, uv_unit, lra, strain_limits });
     scene.materials.push(material);
     Ok(())
 }
