@@ -18,6 +18,8 @@ use crate::mesh::Mesh;
 pub const TOLERANCE: Real = 1e-3;
 /// How far inside the limits a projected face is aimed.
 const MARGIN: Real = 0.5 * TOLERANCE;
+/// Largest change of a principal stretch in one face projection (a factor).
+const STEP: Real = 1.25;
 /// Over-relaxation of each face's correction.
 const OMEGA: Real = 1.0;
 /// Sweeps over the faces per step at most.
@@ -32,6 +34,8 @@ pub struct StrainLimitReport {
     /// Largest distance of a principal stretch outside its limits after the projection.
     pub excess: Real,
     pub converged: bool,
+    /// The projection made the worst face worse and was undone.
+    pub reverted: bool,
 }
 
 /// The principal stretches (σ₁ ≤ σ₂) of a face, and the eigenvectors of FᵀF (columns, matching).
@@ -65,6 +69,19 @@ pub fn limit_strain(
     let faces: Vec<usize> = (0..mesh.faces.len())
         .filter(|&f| limits.get(mesh.faces[f].material as usize).is_some_and(|l| l.is_some()))
         .collect();
+    let worst_excess = |x: &[Vec3]| {
+        faces
+            .iter()
+            .map(|&f| excess(face_stretches(mesh, &rest[f], f, x), limits[mesh.faces[f].material as usize].unwrap()))
+            .fold(0.0, Real::max)
+    };
+    let before = worst_excess(x);
+    if before <= TOLERANCE {
+        report.converged = true;
+        report.excess = before;
+        return report;
+    }
+    let (x_before, moved_before) = (x.to_vec(), moved.to_vec());
     for _ in 0..MAX_SWEEPS {
         let mut worst: Real = 0.0;
         report.sweeps += 1;
@@ -82,7 +99,10 @@ pub fn limit_strain(
             // Aim a little inside the limits, so that a neighbour's projection does not put the
             // face straight back outside them.
             let (lo, hi) = (lim[0] + MARGIN, lim[1] - MARGIN);
-            let scale = Vec2::new(s[0].clamp(lo, hi) / s[0], s[1].clamp(lo, hi) / s[1]);
+            // At most a factor STEP per projection: a nearly collapsed face (σ₁ ≪ min) would
+            // otherwise throw its corners far in one move.
+            let target = |si: Real| si.clamp(lo, hi).clamp(si / STEP, si * STEP) / si;
+            let scale = Vec2::new(target(s[0]), target(s[1]));
             let g = fm * (v * Mat2::from_diagonal(&scale) * v.transpose());
             // Target shape relative to corner 0: x_j − x_0 = G (u_j − u_0), i.e. G D_m e_j.
             let dm = rest[f].dm_inv.try_inverse().unwrap_or_else(Mat2::zeros);
@@ -111,10 +131,15 @@ pub fn limit_strain(
             break;
         }
     }
-    report.excess = faces
-        .iter()
-        .map(|&f| excess(face_stretches(mesh, &rest[f], f, x), limits[mesh.faces[f].material as usize].unwrap()))
-        .fold(0.0, Real::max);
+    report.excess = worst_excess(x);
+    // Sweeps that did not converge may leave some face worse than before: then the step keeps
+    // its unprojected positions (counted as unconverged) rather than a tangle.
+    if report.excess > before {
+        x.copy_from_slice(&x_before);
+        moved.copy_from_slice(&moved_before);
+        report.excess = before;
+        report.reverted = true;
+    }
     report
 }
 
