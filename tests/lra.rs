@@ -281,3 +281,28 @@ fn arcsim_flag_runs_with_its_strain_limits() {
     assert!(out_without > 0.0, "without limits the flag should leave [0.95, 1.05]");
     assert!(out_with <= out_without, "with limits {out_with}, without {out_without}");
 }
+
+#[test]
+fn bad_lra_and_strain_limit_values_are_one_line_errors_naming_the_field() {
+    let scene = |extra: serde_json::Value| {
+        let mut cloth = json!({"rectangle": {"width": 1.0, "height": 1.0, "resolution": [2, 2]}, "material": {}});
+        for (k, v) in extra.as_object().unwrap() {
+            cloth[k] = v.clone();
+        }
+        json!({"version": 1, "frame_time": 0.04, "steps_per_frame": 1, "frames": 1, "cloths": [cloth]})
+    };
+    let cases = [
+        (json!({"lra": {"stretch": -1}}), "cloths[0].lra.stretch"),
+        (json!({"lra": {"max_attachments": 0}}), "cloths[0].lra.max_attachments"),
+        (json!({"lra": {"distance": "manhattan"}}), "cloths[0].lra.distance"),
+        (json!({"lra": {"radius": 1}}), "cloths[0].lra"),
+        (json!({"strain_limits": [1.1, 1.2]}), "cloths[0].strain_limits"),
+    ];
+    for (extra, field) in cases {
+        let e = scene::load_value(scene(extra.clone()), Path::new("s.json"), &crate_dir(), "s").unwrap_err();
+        let msg = e.to_string();
+        assert!(msg.contains(field) && !msg.contains('\n'), "{extra}: {msg}");
+    }
+    let ok = scene::load_value(scene(json!({"lra": {}})), Path::new("s.json"), &crate_dir(), "s").unwrap();
+    assert_eq!(ok.cloths[0].lra, Some(viewcloth::constraints::LraParams::default()));
+}
