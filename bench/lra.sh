@@ -7,7 +7,9 @@
 # Scenes: a 1 m sheet hanging from its top edge with a soft membrane (cotton, stretching × 0.005;
 # 40×40, written by this script) without / with `lra: {stretch: 0.02}`, and ARCSim's flag.json
 # (../shared/arcsim, read as it is; converted to a scene to vary it) without strain limits, with
-# its strain_limits [0.95, 1.05], with LRA to its pole handle, and with both. One thread.
+# its strain_limits [0.95, 1.05], with LRA to its pole handle, and with both; the denim skirt on
+# the walking capsule mannequin (scenes/skirt_mannequin.json, waist nodes riding on the hips)
+# without / with `lra: {stretch: 0.02}`. One thread.
 set -euo pipefail
 BIN=$(realpath "$1"); OUT=$(realpath -m "$2"); FRAMES=${3:-10}
 HERE=$(cd "$(dirname "$0")/.." && pwd)
@@ -38,7 +40,15 @@ def write(name, sl, lra):
 write("flag_none", False, False); write("flag_sl", True, False)
 write("flag_lra", False, True); write("flag_sl_lra", True, True)
 PY
-for s in hang_soft hang_soft_lra flag_none flag_sl flag_lra flag_sl_lra; do
+python3 - "$HERE/scenes/skirt_mannequin.json" "$OUT/scenes" <<'PY'
+import json, sys, os
+s = json.load(open(sys.argv[1])); d = sys.argv[2]
+s["cloths"][0]["mesh"] = os.path.join(os.path.dirname(sys.argv[1]), s["cloths"][0]["mesh"])
+json.dump(s, open(os.path.join(d, "skirt.json"), "w"))
+s["cloths"][0]["lra"] = {"stretch": 0.02}; s["name"] = "skirt_lra"
+json.dump(s, open(os.path.join(d, "skirt_lra.json"), "w"))
+PY
+for s in ${RUNS:-hang_soft hang_soft_lra flag_none flag_sl flag_lra flag_sl_lra skirt skirt_lra}; do
   "$BIN" simulate "$OUT/scenes/$s.json" --frames "$FRAMES" --out "$OUT/$s" --threads 1 --quiet --force --progress none
 done
 python3 - "$OUT" <<'PY'
@@ -46,7 +56,9 @@ import json, sys, os
 root = sys.argv[1]
 print("| run | frames | max strain | mean strain (last frame) | faces (last) | wall s | lra share | strain_limit share | LRA max path stretch | faces at limit (last) | unconverged steps |")
 print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
-for s in ["hang_soft", "hang_soft_lra", "flag_none", "flag_sl", "flag_lra", "flag_sl_lra"]:
+for s in ["hang_soft", "hang_soft_lra", "flag_none", "flag_sl", "flag_lra", "flag_sl_lra", "skirt", "skirt_lra"]:
+    if not os.path.exists(os.path.join(root, s, "stats.json")):
+        continue
     st = json.load(open(os.path.join(root, s, "stats.json")))
     fr = [f for f in st["frames"] if f["frame"] > 0]
     wall = sum(f["wall_s"] for f in fr)
