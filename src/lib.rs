@@ -18,6 +18,7 @@ pub mod camera;
 pub mod cli;
 pub mod collision;
 pub mod compare;
+pub mod constraints;
 pub mod error;
 pub mod farm;
 pub mod forces;

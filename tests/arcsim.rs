@@ -105,7 +105,8 @@ fn confs_read_as_arcsim_reads_them() {
     assert_eq!(flag.scene.wind.unwrap().velocity, Vec3::new(10.0, 0.0, 0.0));
     assert_eq!(flag.scene.frames, 500, "duration 20 s used as the end time");
     let w = flag.warnings.join("\n");
-    assert!(w.contains("duration") && w.contains("strain_limits"), "{w}");
+    assert!(w.contains("duration") && !w.contains("strain_limits"), "{w}");
+    assert_eq!(flag.scene.cloths[0].strain_limits, Some([0.95, 1.05]), "strain limiting now runs");
 
     let dress = conf("dress-blue.json");
     assert_eq!(dress.scene.obstacles.len(), 16, "body0000 … body0015");

@@ -42,6 +42,38 @@ pub struct FrameStats {
     /// Present when a cloth remeshes adaptively.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub remesh: Option<RemeshFrameStats>,
+    /// Present when a cloth has long range attachments.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub lra: Option<LraFrameStats>,
+    /// Present when a cloth has strain limits.
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub strain_limit: Option<StrainLimitFrameStats>,
+}
+
+/// Long range attachments at the frame end (`constraints::lra`).
+#[derive(Serialize, Deserialize, Debug, Clone, Default, PartialEq)]
+pub struct LraFrameStats {
+    /// Node–attachment constraints in force (to active handles).
+    pub lra_constraints: usize,
+    /// Constraints taut at the frame end (node on its sphere).
+    pub lra_taut: usize,
+    /// Violated constraints projected, summed over the frame's steps.
+    pub lra_projected: usize,
+    /// Largest stretch along an attachment path at the frame end: |x − x_attachment| / rest − 1.
+    pub lra_max_stretch: f64,
+}
+
+/// Strain limiting (`constraints::strain_limit`).
+#[derive(Serialize, Deserialize, Debug, Clone, Default, PartialEq)]
+pub struct StrainLimitFrameStats {
+    /// Faces with a principal stretch at a limit (within 1e-4) or beyond it at the frame end.
+    pub strain_limit_faces: usize,
+    /// Most projection sweeps of a step in the frame.
+    pub strain_limit_sweeps: usize,
+    /// Steps whose projection stopped at the sweep cap.
+    pub strain_limit_unconverged: usize,
+    /// Largest principal stretch outside the limits right after a projection (before collisions).
+    pub strain_limit_excess: f64,
 }
 
 /// Remeshing work done at the start of a frame.

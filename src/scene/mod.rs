@@ -22,6 +22,7 @@ use std::path::PathBuf;
 use crate::camera::Camera;
 use crate::collision::params::CollisionParams;
 use crate::collision::shape::Obstacle;
+use crate::constraints::LraParams;
 use crate::error::InputError;
 use crate::forces::material::Material;
 use crate::forces::wind::Wind;
@@ -43,6 +44,10 @@ pub struct Cloth {
     /// `transform.scale`; for a mesh without `vt` or a rectangle, the scale alone): output UVs
     /// are material coordinates divided by it, so they are in the input's units.
     pub uv_unit: Real,
+    /// Long range attachments to the handles' nodes (Kim et al. 2012).
+    pub lra: Option<LraParams>,
+    /// [min, max] principal stretch of every face.
+    pub strain_limits: Option<[Real; 2]>,
 }
 
 /// Whether a cloth's mesh adapts every few frames or is refined once.

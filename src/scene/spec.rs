@@ -124,6 +124,27 @@ pub struct ClothSpec {
     /// Rest dihedral angles: `input` (default, the input mesh's shape) or `flat` (ARCSim).
     #[serde(default)]
     pub rest_angles: Option<String>,
+    /// Long range attachments (Kim et al. 2012); absent = none.
+    #[serde(default)]
+    pub lra: Option<LraSpec>,
+    /// [min, max] principal stretch of every face (strain limiting); absent = none.
+    #[serde(default)]
+    pub strain_limits: Option<[f64; 2]>,
+}
+
+/// Long range attachments of one cloth to its handles' nodes.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct LraSpec {
+    /// Attachment islands each node is tied to (default 4).
+    #[serde(default)]
+    pub max_attachments: Option<i64>,
+    /// Radius inflation (0 = inextensible, 0.1 = 10%; default 0).
+    #[serde(default)]
+    pub stretch: Option<f64>,
+    /// `geodesic` (default) or `euclidean`.
+    #[serde(default)]
+    pub distance: Option<String>,
 }
 
 /// Remeshing of one cloth (Narain et al. 2012). A missing criterion is off.

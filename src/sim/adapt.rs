@@ -155,6 +155,7 @@ impl Simulation {
             .collect();
         state.extra_pairs.clear();
         self.ws.remeshed(state)?;
+        self.constraints_remeshed();
         self.push_out(None)?;
         Ok(())
     }

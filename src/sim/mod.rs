@@ -6,6 +6,7 @@
 mod adapt;
 pub mod checkpoint;
 pub mod checks;
+pub mod constrain;
 pub mod interrupt;
 pub mod output;
 pub mod progress;

@@ -224,6 +224,7 @@ impl Output<'_> {
         let crossings = sim.crossings();
         (fs.crossings_self, fs.crossings_obstacle) = (crossings.cloth.len(), crossings.obstacle.len());
         sim.ws.timers.since(Stage::CrossingCheck, check);
+        sim.constraint_stats(&mut fs);
         let faults = std::mem::take(&mut sim.ws.faults);
         fs.steps = faults.steps;
         fs.retries = faults.retries;

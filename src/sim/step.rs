@@ -88,6 +88,7 @@ impl Simulation {
             self.timed(Stage::Friction, |s| s.friction(&step, &mut v));
         }
         let mut x = self.timed(Stage::Integration, |s| s.end_positions(&step, &v));
+        self.constrain(&step.x0, &step.inv_mass, step.h, &mut x, &mut v);
         if self.ws.collisions.is_some() {
             let capped = self.timed(Stage::Collision, |s| s.resolve_collisions(&step, &mut x, &mut v));
             if capped && !accept_unresolved {

@@ -40,6 +40,10 @@ pub enum Stage {
     Output,
     /// Writing a checkpoint.
     Checkpoint,
+    /// Long range attachments projected after the solve (`constraints::lra`).
+    Lra,
+    /// Strain limiting after the solve (`constraints::strain_limit`).
+    StrainLimit,
 }
 
 impl Stage {
@@ -61,6 +65,8 @@ impl Stage {
             Stage::CrossingCheck => "crossing_check",
             Stage::Output => "output",
             Stage::Checkpoint => "checkpoint",
+            Stage::Lra => "lra",
+            Stage::StrainLimit => "strain_limit",
         }
     }
 }

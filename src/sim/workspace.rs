@@ -14,6 +14,7 @@ use crate::scene::Scene;
 use crate::solver::pattern::BlockPattern;
 use crate::solver::ImplicitSystem;
 
+use super::constrain::Constraints;
 use super::recover::FaultStats;
 use super::state::SimState;
 use super::timers::StageTimers;
@@ -36,6 +37,8 @@ pub struct Workspace {
     pub counters: CollisionCounters,
     pub remesh_stats: RemeshStats,
     pub faults: FaultStats,
+    /// Present when a cloth has long range attachments or strain limits.
+    pub constraints: Option<Constraints>,
 }
 
 impl Workspace {
@@ -59,6 +62,7 @@ impl Workspace {
             counters: CollisionCounters::default(),
             remesh_stats: RemeshStats::default(),
             faults: FaultStats::default(),
+            constraints: Constraints::build(scene, state),
         })
     }
 

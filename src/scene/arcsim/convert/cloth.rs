@@ -38,8 +38,11 @@ impl Conv<'_> {
             let msg = "only the first material is used (faces carry no material labels here)";
             self.warn(&format!("{loc}.materials[1]"), msg);
         }
-        let material = self.material(first, &format!("{loc}.materials[0]"), disabled)?;
+        let (material, strain_limits) = self.material(first, &format!("{loc}.materials[0]"), disabled)?;
         fields.push(("material".into(), material));
+        if let Some(sl) = strain_limits {
+            fields.push(("strain_limits".into(), nums(&sl)));
+        }
         match (m.get("remeshing"), disabled.remeshing) {
             (Some(_), true) | (None, _) => {}
             (Some(r), false) => fields.push(("remesh".into(), self.remeshing(r, &join(&loc, "remeshing"), magic)?)),
@@ -66,7 +69,8 @@ impl Conv<'_> {
         }
     }
 
-    fn material(&mut self, v: &Value, loc: &str, disabled: &Disabled) -> Res<J> {
+    /// A material's scene fields, and its `strain_limits` unless `disable` has strain limiting.
+    fn material(&mut self, v: &Value, loc: &str, disabled: &Disabled) -> Res<(J, Option<[f64; 2]>)> {
         let m = self.object(v, loc)?;
         let known = [
             "data",
@@ -92,12 +96,17 @@ impl Conv<'_> {
             ("fracture_bending_mult", not_supported),
         ];
         self.check_keys(m, loc, &known, &ignored);
-        if let Some(sl) = m.get("strain_limits") {
-            self.numbers::<2>(sl, &join(loc, "strain_limits"))?;
-            if !disabled.strain_limiting {
-                self.warn(&join(loc, "strain_limits"), "strain limiting is not supported; ignored");
+        let strain_limits = match m.get("strain_limits") {
+            Some(sl) => {
+                let [lo, hi] = self.numbers::<2>(sl, &join(loc, "strain_limits"))?;
+                if !(lo > 0.0 && lo <= 1.0 && hi >= 1.0) {
+                    let msg = format!("expected [min, max] with 0 < min ≤ 1 ≤ max, got [{lo}, {hi}]");
+                    return Err(self.err(&join(loc, "strain_limits"), msg));
+                }
+                (!disabled.strain_limiting).then_some([lo, hi])
             }
-        }
+            None => None,
+        };
         let mut fields = Vec::new();
         let mult = |c: &Self, key: &str| -> Res<Option<f64>> {
             match c.opt_num(m, key, loc)? {
@@ -155,7 +164,7 @@ impl Conv<'_> {
             None => 0.0,
         };
         fields.push(("damping", J::Num(damping)));
-        Ok(obj(fields))
+        Ok((obj(fields), strain_limits))
     }
 
     fn remeshing(&mut self, v: &Value, loc: &str, magic: &Magic) -> Res<J> {
