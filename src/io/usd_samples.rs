@@ -41,7 +41,8 @@ pub fn read_samples(path: &Path) -> Result<SampledFrame, String> {
         if prims.last().is_none_or(|p| p.prim != prim) {
             prims.push(PrimMesh { prim: prim.to_string(), ..Default::default() });
         }
-        let mesh = prims.last_mut().expect("pushed above");
+        let last = prims.len() - 1;
+        let mesh = &mut prims[last];
         match decl {
             "point3f[] points" => {
                 let c = numbers(value).map_err(|e| bad(&e))?;

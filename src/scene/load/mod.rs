@@ -4,12 +4,11 @@
 use std::path::{Path, PathBuf};
 
 use super::material::resolve;
-use super::spec::{ClothSpec, CollisionSpec, HandleSpec, KeyframeSpec, LraSpec, MotSpec, SceneSpec, TransformSpec};
+use super::spec::{ClothSpec, CollisionSpec, HandleSpec, KeyframeSpec, MotSpec, SceneSpec, TransformSpec};
 use super::{Cloth, FollowObstacle, Handle, Scene};
 use crate::camera::Camera;
 use crate::collision::params::CollisionParams;
 use crate::collision::shape::{Obstacle, ObstacleShape};
-use crate::constraints::{Distance, LraParams};
 use crate::error::InputError;
 use crate::forces::wind::Wind;
 use crate::io::obj::{read_obj, ObjData};
@@ -21,8 +20,10 @@ use crate::mesh::{rectangle, Face, Mesh, MeshError, Node, NodeId, Vert, VertId};
 pub const DEFAULT_SCENE: &str = include_str!("../../../scenes/hanging_sheet.json");
 pub const DEFAULT_SCENE_NAME: &str = "hanging_sheet";
 
+mod constraints;
 mod obstacle;
 mod remesh;
+use constraints::{lra_params, strain_limits};
 use obstacle::load_obstacle;
 use remesh::remesh_params;
 
@@ -414,38 +415,6 @@ fn add_cloth(ctx: &Ctx, scene: &mut Scene, c: usize, cs: &ClothSpec) -> Res<()> 
     scene.cloths.push(Cloth { name, material: scene.materials.len(), remesh, flat_rest, uv_unit, lra, strain_limits });
     scene.materials.push(material);
     Ok(())
-}
-
-/// A cloth's `lra` block: `max_attachments` an integer in 1..=64, `stretch` finite and ≥ 0,
-/// `distance` `"geodesic"` or `"euclidean"`.
-fn lra_params(ctx: &Ctx, path: &str, l: &LraSpec) -> Res<LraParams> {
-    let mut p = LraParams::default();
-    if let Some(n) = l.max_attachments {
-        if !(1..=64).contains(&n) {
-            return Err(ctx.err(format!("{path}.max_attachments"), format!("expected an integer in 1..=64, got {n}")));
-        }
-        p.max_attachments = n as usize;
-    }
-    if let Some(s) = l.stretch {
-        if !s.is_finite() || s < 0.0 {
-            return Err(ctx.err(format!("{path}.stretch"), format!("expected a number ≥ 0 (0.1 = 10%), got {s}")));
-        }
-        p.stretch = s;
-    }
-    if let Some(d) = &l.distance {
-        p.distance = Distance::parse(d).ok_or_else(|| {
-            ctx.err(format!("{path}.distance"), format!("expected \"geodesic\" or \"euclidean\", got \"{d}\""))
-        })?;
-    }
-    Ok(p)
-}
-
-/// `strain_limits: [min, max]` with 0 < min ≤ 1 ≤ max, finite.
-fn strain_limits(ctx: &Ctx, path: &str, [lo, hi]: [f64; 2]) -> Res<[f64; 2]> {
-    if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo <= 1.0 && hi >= 1.0) {
-        return Err(ctx.err(path, format!("expected [min, max] with 0 < min ≤ 1 ≤ max, got [{lo}, {hi}]")));
-    }
-    Ok([lo, hi])
 }
 
 /// The obstacle a handle follows, by name; it must be rigid (a per-frame sequence deforms, so
