@@ -33,3 +33,4 @@ pub mod shot;
 pub mod sim;
 pub mod sizing;
 pub mod solver;
+pub mod upsample;
