@@ -5,8 +5,8 @@
 //! One idea per file: `surface` (a fixed-topology triangle mesh with material coordinates),
 //! `embed` (the barycentric embedding B of §4), `laplacian` (cotangent Laplacian and lumped
 //! mass), `harmonics` (its lowest mass-orthonormal eigenvectors), `profile` (the polynomial
-//! damping γ_n of §3.2 and §6), `fit` (the per-row constrained least squares, eq. 5) and
-//! `operator` (U and its application).
+//! damping γ_n of §3.2 and §6), `fit` (the per-row constrained least squares, eq. 5),
+//! `operator` (U and its application) and `model` (the versioned model file).
 //!
 //! Everything assumes one coarse and one fine topology for the whole shot: train and apply on
 //! uniform (fixed-mesh) runs.
@@ -15,6 +15,7 @@ mod embed;
 mod fit;
 mod harmonics;
 mod laplacian;
+mod model;
 mod operator;
 mod profile;
 mod surface;
@@ -23,6 +24,7 @@ pub use embed::{embedding, Embedding};
 pub use fit::{fit, TrainingSet};
 pub use harmonics::Harmonics;
 pub use laplacian::Laplacian;
+pub use model::{Model, ModelError};
 pub use operator::Operator;
 pub use profile::Profile;
 pub use surface::Surface;
