@@ -6,7 +6,8 @@
 //! `embed` (the barycentric embedding B of §4), `laplacian` (cotangent Laplacian and lumped
 //! mass), `harmonics` (its lowest mass-orthonormal eigenvectors), `profile` (the polynomial
 //! damping γ_n of §3.2 and §6), `fit` (the per-row constrained least squares, eq. 5),
-//! `operator` (U and its application) and `model` (the versioned model file).
+//! `operator` (U and its application), `model` (the versioned model file) and `run` (training
+//! and applying over run directories).
 //!
 //! Everything assumes one coarse and one fine topology for the whole shot: train and apply on
 //! uniform (fixed-mesh) runs.
@@ -18,6 +19,7 @@ mod laplacian;
 mod model;
 mod operator;
 mod profile;
+pub mod run;
 mod surface;
 
 pub use embed::{embedding, Embedding};
