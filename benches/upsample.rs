@@ -44,6 +44,19 @@ fn apply_timing(m: usize, n: usize) {
         times[0],
         pf.sum()
     );
+    // The same product with U stored in f32 (what the paper's 5.5 MB for 7016 × 196 implies):
+    // the product is memory-bound, so halving U's bytes is the lever; not what `Operator` does yet.
+    let (u32, pc32) = (op.u.map(|x| x as f32), pc.map(|x| x as f32));
+    let mut pf32 = nalgebra::DMatrix::<f32>::zeros(n, 3);
+    let mut times: Vec<f64> = (0..REPEAT)
+        .map(|_| {
+            let t = Instant::now();
+            pf32.gemm(1.0, &u32, &pc32, 0.0);
+            t.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    times.sort_by(|a, b| a.total_cmp(b));
+    println!("apply, U in f32 ({:.1} MB): median {:.3} ms, min {:.3} ms per frame", mb / 2.0, times[REPEAT / 2], times[0]);
 }
 
 /// Grids `c × c` cells (coarse) and `f × f` (fine) over the unit square, `frames` wavy frames.
