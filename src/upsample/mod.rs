@@ -27,7 +27,7 @@ pub use fit::{fit, TrainingSet};
 pub use harmonics::Harmonics;
 pub use laplacian::Laplacian;
 pub use model::{Model, ModelError};
-pub use operator::Operator;
+pub use operator::{Compact, Operator};
 pub use profile::Profile;
 pub use surface::Surface;
 

@@ -5,7 +5,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use super::{fit, Harmonics, Laplacian, Model, Profile, Surface, TrainingSet};
+use super::{fit, Compact, Harmonics, Laplacian, Model, Profile, Surface, TrainingSet};
 use crate::io::obj::{read_obj, ObjData};
 use crate::io::write_atomic;
 use crate::math::{Real, Vec3};
@@ -79,6 +79,7 @@ pub fn train(coarse: &Path, fine: &Path, opts: &TrainOptions) -> Result<(Model, 
 pub fn apply(model: &Model, coarse: &Path, out: &Path) -> Result<usize, RunError> {
     let numbers = frame_numbers(coarse).map_err(|e| RunError::Input(e.to_string()))?;
     std::fs::create_dir_all(out).map_err(|e| RunError::Output(format!("{}: {e}", out.display())))?;
+    let mut compact = Compact::new(&model.op);
     for &k in &numbers {
         let obj = read_frame(coarse, k)?;
         let m = model.op.coarse_nodes();
@@ -89,7 +90,7 @@ pub fn apply(model: &Model, coarse: &Path, out: &Path) -> Result<usize, RunError
             );
             return Err(input(&frame_path(coarse, k), msg));
         }
-        let fine = model.op.apply(&obj.positions);
+        let fine = compact.apply(&obj.positions);
         let path = frame_path(out, k);
         write_atomic(&path, fine_obj(model, &fine).as_bytes())
             .map_err(|e| RunError::Output(format!("{}: {e}", path.display())))?;
