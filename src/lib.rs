@@ -34,3 +34,4 @@ pub mod shot;
 pub mod sim;
 pub mod sizing;
 pub mod solver;
+pub mod upsample;

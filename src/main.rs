@@ -44,6 +44,7 @@ fn main() -> ExitCode {
         Command::Resample(args) => cli::resample(args),
         Command::Batch(args) => cli::batch(args),
         Command::Crossings(args) => cli::crossings(args),
+        Command::Upsample(cmd) => cli::upsample(cmd),
         Command::Convert { conf, out, base } => cli::convert(&conf, &out, base.as_deref()),
     };
     match result {

@@ -47,6 +47,10 @@ pub enum Command {
     /// and, when exported, obstacle_<name>_NNNN.obj): cloth–cloth and cloth–obstacle, pairs
     /// sharing a node skipped. Prints one line per frame; exits 1 if any pair crosses.
     Crossings(CrossingsArgs),
+    /// Physics-inspired upsampling (Kavan et al. 2011): learn a linear coarse → fine operator
+    /// from a coarse and a fine uniform run of the same shot, and apply it to coarse runs.
+    #[command(subcommand)]
+    Upsample(UpsampleCommand),
     /// Convert an ARCSim conf into a viewcloth scene file.
     Convert {
         conf: PathBuf,
@@ -302,5 +306,51 @@ pub struct ResampleArgs {
     pub auto: bool,
     /// Where to write (frame_NNNN.obj, cloth.pc2, cloth.usda, resample.json).
     #[arg(long)]
+    pub out: PathBuf,
+}
+
+#[derive(Subcommand)]
+pub enum UpsampleCommand {
+    /// Learn the operator from paired frames (same numbers) of a coarse and a fine uniform run.
+    Train(UpsampleTrainArgs),
+    /// Upsample every frame of a coarse uniform run into fine OBJ frames.
+    Apply(UpsampleApplyArgs),
+}
+
+#[derive(clap::Args)]
+pub struct UpsampleTrainArgs {
+    /// Output directory of the coarse run (frame_NNNN.obj, one topology).
+    #[arg(long, value_name = "DIR")]
+    pub coarse: PathBuf,
+    /// Output directory of the fine run, with the same frame numbers.
+    #[arg(long, value_name = "DIR")]
+    pub fine: PathBuf,
+    /// Harmonics kept (default: all, one per fine node).
+    #[arg(long, value_name = "K")]
+    pub modes: Option<usize>,
+    /// Damping of the lowest harmonic, γ_1 (paper §6: 1).
+    #[arg(long, default_value_t = 1.0)]
+    pub gamma1: f64,
+    /// Damping of the highest harmonic, γ_N (paper §6: 1e5).
+    #[arg(long = "gammaN", alias = "gamma-n", default_value_t = 1e5)]
+    pub gamma_n: f64,
+    /// Exponent of the damping profile γ_n = a(1 + b(n−1)/N)^c (paper §6: 4).
+    #[arg(long, default_value_t = 4.0)]
+    pub c: f64,
+    /// The model file to write.
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+#[derive(clap::Args)]
+pub struct UpsampleApplyArgs {
+    /// A model written by `upsample train`.
+    #[arg(value_name = "MODEL")]
+    pub model: PathBuf,
+    /// Output directory of a coarse uniform run on the model's coarse mesh.
+    #[arg(long, value_name = "DIR")]
+    pub coarse: PathBuf,
+    /// Where to write the fine frames (frame_NNNN.obj, the coarse frames' numbers).
+    #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
 }

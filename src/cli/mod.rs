@@ -21,7 +21,9 @@ use crate::sim::SimError;
 use crate::sim::{
     claim_output, interrupt, resume, run_shot, CheckpointOptions, Jitter, ResumeOptions, RunError, RunOptions,
 };
-use args::{BatchArgs, CompareArgs, CrossingsArgs, RenderArgs, ResampleArgs, ResumeArgs, SimulateArgs};
+use args::{
+    BatchArgs, CompareArgs, CrossingsArgs, RenderArgs, ResampleArgs, ResumeArgs, SimulateArgs, UpsampleCommand,
+};
 
 /// Exit code for bad input (scene, mesh, command line).
 pub const EXIT_INPUT: u8 = 2;
@@ -489,5 +491,39 @@ pub fn convert(conf: &Path, out: &Path, base: Option<&Path>) -> Result<(), CliEr
         .and_then(|()| crate::io::write_atomic(out, json.as_bytes()))
         .map_err(|e| CliError::Run(format!("{}: {e}", out.display())))?;
     println!("{} → {}", conf.display(), out.display());
+    Ok(())
+}
+
+/// `upsample train` and `upsample apply`.
+pub fn upsample(cmd: UpsampleCommand) -> Result<(), CliError> {
+    use crate::upsample::run::{apply, train, RunError, TrainOptions};
+    use crate::upsample::Model;
+    let cli_error = |e: RunError| match e {
+        RunError::Input(m) => CliError::Input(m),
+        RunError::Output(m) => CliError::Run(m),
+    };
+    match cmd {
+        UpsampleCommand::Train(a) => {
+            let opts = TrainOptions { modes: a.modes, gamma1: a.gamma1, gamma_n: a.gamma_n, c: a.c };
+            let start = std::time::Instant::now();
+            let (model, r) = train(&a.coarse, &a.fine, &opts).map_err(cli_error)?;
+            crate::io::write_atomic(&a.out, &model.to_bytes())
+                .map_err(|e| CliError::Run(format!("{}: {e}", a.out.display())))?;
+            println!(
+                "trained on {} frames: {} coarse → {} fine nodes, {} harmonics, {:.1} s → {}",
+                r.frames,
+                r.coarse_nodes,
+                r.fine_nodes,
+                r.modes,
+                start.elapsed().as_secs_f64(),
+                a.out.display()
+            );
+        }
+        UpsampleCommand::Apply(a) => {
+            let model = Model::read(&a.model).map_err(|e| CliError::Input(e.to_string()))?;
+            let n = apply(&model, &a.coarse, &a.out).map_err(cli_error)?;
+            println!("{n} frames upsampled → {}", a.out.display());
+        }
+    }
     Ok(())
 }

@@ -29,7 +29,7 @@
 
 mod auto;
 mod frames;
-mod locate;
+pub(crate) mod locate;
 mod write;
 
 use std::path::{Path, PathBuf};

@@ -1,0 +1,114 @@
+//! Upsampling benchmark (issue 13): apply time per frame of a dense U for M = 196 coarse and
+//! N = 7056 fine nodes (the paper's skirt is 196 × 7016: 0.8 ms on one 2.9 GHz core; target here
+//! under 0.5 ms), single-threaded, with U in f64 (`Operator`) and in f32 (`Compact`); and the training cost (harmonics, fit) at a size the dense
+//! eigensolver handles in seconds.
+//!
+//! The apply timing does not depend on U's values, so it uses a synthetic dense U whose rows sum
+//! to one (training at N = 7056 would need a 7056² dense eigensolve, minutes here).
+//!
+//! `cargo bench --bench upsample`
+
+use std::time::Instant;
+
+use nalgebra::DMatrix;
+use viewcloth::io::obj::{Corner, ObjData};
+use viewcloth::math::{Real, Vec2, Vec3};
+use viewcloth::upsample::{fit, Compact, Harmonics, Laplacian, Operator, Profile, Surface, TrainingSet};
+
+const REPEAT: usize = 200;
+
+fn main() {
+    apply_timing(196, 7056);
+    training_timing(9, 30, 50);
+}
+
+fn apply_timing(m: usize, n: usize) {
+    let u = DMatrix::from_fn(n, m, |i, j| ((i * 31 + j * 17) % 97) as Real + 1.0);
+    let u = DMatrix::from_fn(n, m, |i, j| u[(i, j)] / u.row(i).sum());
+    let op = Operator::new(u);
+    let pc = DMatrix::from_fn(m, 3, |i, d| (i * 3 + d) as Real * 1e-3);
+    let mut pf = DMatrix::zeros(n, 3);
+    op.apply_into(&pc, &mut pf); // warm up
+    let mut times: Vec<f64> = (0..REPEAT)
+        .map(|_| {
+            let t = Instant::now();
+            op.apply_into(&pc, &mut pf);
+            t.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    times.sort_by(|a, b| a.total_cmp(b));
+    let mb = (n * m * 8) as f64 / 1e6;
+    println!(
+        "apply: M {m}, N {n}, U {mb:.1} MB (f64): median {:.3} ms, min {:.3} ms per frame ({REPEAT} runs; check {:.3})",
+        times[REPEAT / 2],
+        times[0],
+        pf.sum()
+    );
+    // `Compact`: U in f32 about the coarse centroid (what `upsample apply` uses), the whole
+    // call timed (centring, product, conversion back to f64 points).
+    let mut compact = Compact::new(&op);
+    let points: Vec<Vec3> = (0..m).map(|i| Vec3::new(pc[(i, 0)], pc[(i, 1)], pc[(i, 2)])).collect();
+    let mut times: Vec<f64> = (0..REPEAT)
+        .map(|_| {
+            let t = Instant::now();
+            std::hint::black_box(compact.apply(&points));
+            t.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    times.sort_by(|a, b| a.total_cmp(b));
+    println!(
+        "apply, Compact (U in f32, {:.1} MB): median {:.3} ms, min {:.3} ms per frame",
+        mb / 2.0,
+        times[REPEAT / 2],
+        times[0]
+    );
+}
+
+/// Grids `c × c` cells (coarse) and `f × f` (fine) over the unit square, `frames` wavy frames.
+fn training_timing(c: usize, f: usize, frames: usize) {
+    let (coarse, fine) = (grid(c), grid(f));
+    let t = Instant::now();
+    let lap = Laplacian::new(&fine).unwrap();
+    let h = Harmonics::new(&lap, fine.nodes).unwrap();
+    let th = t.elapsed().as_secs_f64();
+    let wave = |s: &Surface, k: usize| -> Vec<Vec3> {
+        let p = |n: usize| Vec2::new((n % (s_side(s))) as Real, (n / s_side(s)) as Real) / (s_side(s) - 1) as Real;
+        (0..s.nodes).map(|n| Vec3::new(p(n).x, p(n).y, 0.1 * (4.0 * p(n).x + 0.2 * k as Real).sin())).collect()
+    };
+    let data = TrainingSet {
+        coarse: (0..frames).map(|k| wave(&coarse, k)).collect(),
+        fine: (0..frames).map(|k| wave(&fine, k)).collect(),
+    };
+    let t = Instant::now();
+    let op = fit(&h, &Profile::from_bounds(1.0, 1e5, 4.0, fine.nodes).unwrap(), &data).unwrap();
+    println!(
+        "train: M {}, N {}, F {frames}, all N modes: harmonics {:.2} s, fit {:.2} s (U {}×{})",
+        coarse.nodes,
+        fine.nodes,
+        th,
+        t.elapsed().as_secs_f64(),
+        op.fine_nodes(),
+        op.coarse_nodes()
+    );
+}
+
+fn s_side(s: &Surface) -> usize {
+    (s.nodes as f64).sqrt().round() as usize
+}
+
+/// An `n × n`-cell grid over the unit square, as an OBJ frame would give it.
+fn grid(n: usize) -> Surface {
+    let side = n + 1;
+    let texcoords: Vec<Vec2> =
+        (0..side * side).map(|k| Vec2::new((k % side) as Real, (k / side) as Real) / n as Real).collect();
+    let mut triangles = Vec::new();
+    for j in 0..n {
+        for i in 0..n {
+            let id = |a: usize, b: usize| Corner { v: b * side + a, vt: Some(b * side + a) };
+            triangles.push([id(i, j), id(i + 1, j), id(i + 1, j + 1)]);
+            triangles.push([id(i, j), id(i + 1, j + 1), id(i, j + 1)]);
+        }
+    }
+    let positions = texcoords.iter().map(|p| Vec3::new(p.x, p.y, 0.0)).collect();
+    Surface::from_obj(&ObjData { positions, texcoords, triangles, ..ObjData::default() }).unwrap()
+}

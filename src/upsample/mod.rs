@@ -1,0 +1,53 @@
+//! Physics-inspired upsampling (Kavan, Gerszewski, Bargteil & Sloan 2011): a learned dense
+//! linear operator U (N fine × M coarse) with fine = U · coarse (§3, eq. 1), fitted to aligned
+//! coarse/fine training frames with harmonic regularisation and rows summing to one (eqs. 3–5).
+//!
+//! One idea per file: `surface` (a fixed-topology triangle mesh with material coordinates),
+//! `embed` (the barycentric embedding B of §4), `laplacian` (cotangent Laplacian and lumped
+//! mass), `harmonics` (its lowest mass-orthonormal eigenvectors), `profile` (the polynomial
+//! damping γ_n of §3.2 and §6), `fit` (the per-row constrained least squares, eq. 5),
+//! `operator` (U and its application), `model` (the versioned model file) and `run` (training
+//! and applying over run directories).
+//!
+//! Everything assumes one coarse and one fine topology for the whole shot: train and apply on
+//! uniform (fixed-mesh) runs.
+
+mod embed;
+mod fit;
+mod harmonics;
+mod laplacian;
+mod model;
+mod operator;
+mod profile;
+pub mod run;
+mod surface;
+
+pub use embed::{embedding, Embedding};
+pub use fit::{fit, TrainingSet};
+pub use harmonics::Harmonics;
+pub use laplacian::Laplacian;
+pub use model::{Model, ModelError};
+pub use operator::{Compact, Operator};
+pub use profile::Profile;
+pub use surface::Surface;
+
+/// What can go wrong building an operator; each displays as one line.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum UpsampleError {
+    #[error("node {node} touches no face of positive material area (isolated or degenerate)")]
+    ZeroMass { node: usize },
+    #[error("mesh has no faces")]
+    Empty,
+    #[error("faces without texture coordinates (material space is needed)")]
+    NoMaterialCoords,
+    #[error("asked for {asked} harmonics but the fine mesh has {nodes} nodes")]
+    TooManyModes { asked: usize, nodes: usize },
+    #[error("regularisation needs 0 < gamma1 <= gammaN and c >= 0 (got gamma1 {gamma1}, gammaN {gamma_n}, c {c})")]
+    BadProfile { gamma1: f64, gamma_n: f64, c: f64 },
+    #[error("training frame {frame}: {what}")]
+    BadFrame { frame: usize, what: String },
+    #[error("no training frames")]
+    NoFrames,
+    #[error("non-finite value in {what}")]
+    NonFinite { what: &'static str },
+}
