@@ -78,24 +78,33 @@ pub fn train(coarse: &Path, fine: &Path, opts: &TrainOptions) -> Result<(Model, 
 /// Upsamples every frame of `coarse` into `out` (frame_NNNN.obj, same numbers); returns the count.
 pub fn apply(model: &Model, coarse: &Path, out: &Path) -> Result<usize, RunError> {
     let numbers = frame_numbers(coarse).map_err(|e| RunError::Input(e.to_string()))?;
+    // The first frame is checked before the output folder is made: a refused run leaves nothing.
+    if let Some(&first) = numbers.first() {
+        coarse_positions(model, coarse, first)?;
+    }
     std::fs::create_dir_all(out).map_err(|e| RunError::Output(format!("{}: {e}", out.display())))?;
     let mut compact = Compact::new(&model.op);
     for &k in &numbers {
-        let obj = read_frame(coarse, k)?;
-        let m = model.op.coarse_nodes();
-        if obj.positions.len() != m {
-            let msg = format!(
-                "{} nodes, the model was trained on {m} (a different coarse mesh, or an adaptive run?)",
-                obj.positions.len()
-            );
-            return Err(input(&frame_path(coarse, k), msg));
-        }
-        let fine = compact.apply(&obj.positions);
+        let fine = compact.apply(&coarse_positions(model, coarse, k)?);
         let path = frame_path(out, k);
         write_atomic(&path, fine_obj(model, &fine).as_bytes())
             .map_err(|e| RunError::Output(format!("{}: {e}", path.display())))?;
     }
     Ok(numbers.len())
+}
+
+/// Coarse frame `k`'s positions, refused unless it has the model's coarse node count.
+fn coarse_positions(model: &Model, coarse: &Path, k: usize) -> Result<Vec<Vec3>, RunError> {
+    let obj = read_frame(coarse, k)?;
+    let m = model.op.coarse_nodes();
+    if obj.positions.len() != m {
+        let msg = format!(
+            "{} nodes, the model was trained on {m} (a different coarse mesh, or an adaptive run?)",
+            obj.positions.len()
+        );
+        return Err(input(&frame_path(coarse, k), msg));
+    }
+    Ok(obj.positions)
 }
 
 fn frame_path(dir: &Path, number: usize) -> PathBuf {
@@ -196,6 +205,7 @@ mod tests {
         // The fine run applied as if coarse: wrong node count, one line naming the frame.
         let e = apply(&model, &fine, &root.join("bad")).unwrap_err().to_string();
         assert!(e.contains("frame_0000.obj") && e.contains("100 nodes") && !e.contains('\n'), "{e}");
+        assert!(!root.join("bad").exists(), "a refused apply left its output folder");
         // Frames that do not pair up.
         std::fs::remove_file(frame_path(&fine, 5)).unwrap();
         assert!(train(&coarse, &fine, &opts).unwrap_err().to_string().contains("frames differ"));
