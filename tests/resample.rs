@@ -41,6 +41,17 @@ fn frame(dir: &Path, n: usize) -> (String, viewcloth::io::obj::ObjData) {
     (text, obj)
 }
 
+/// Distance from `p` to the nearest triangle of `mesh`.
+fn distance_to_surface(p: Vec3, mesh: &viewcloth::io::obj::ObjData) -> f64 {
+    mesh.triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|c| mesh.positions[c.v]);
+            point_triangle(p, a, b, c)
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// Distance from `p` to triangle `abc` (Ericson, "Real-Time Collision Detection", 5.1.5).
 fn point_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> f64 {
     let n = (b - a).cross(&(c - a));
@@ -104,14 +115,7 @@ fn adaptive_run_resampled_onto_auto_has_one_topology_on_its_surface() {
         assert!(error.is_finite() && error < 0.05, "frame {n}: error {error}");
         // Each resampled vertex is on the adaptive surface (to the OBJ's printed precision).
         for p in &resampled.positions {
-            let d = adaptive
-                .triangles
-                .iter()
-                .map(|t| {
-                    let [a, b, c] = t.map(|c| adaptive.positions[c.v]);
-                    point_triangle(*p, a, b, c)
-                })
-                .fold(f64::INFINITY, f64::min);
+            let d = distance_to_surface(*p, &adaptive);
             assert!(d < 1e-8 && d <= error + 1e-8, "frame {n}: a vertex {d} m off the adaptive surface");
         }
     }
@@ -269,14 +273,7 @@ fn every_cloth_of_a_run_is_resampled() {
             assert_eq!(group_faces(&text, name), group_faces(&first_text, name), "frame {n}: {name}'s faces");
         }
         for p in &resampled.positions {
-            let d = adaptive
-                .triangles
-                .iter()
-                .map(|t| {
-                    let [a, b, c] = t.map(|c| adaptive.positions[c.v]);
-                    point_triangle(*p, a, b, c)
-                })
-                .fold(f64::INFINITY, f64::min);
+            let d = distance_to_surface(*p, &adaptive);
             assert!(d < 1e-8, "frame {n}: a vertex {d} m off the run's surface");
         }
     }
