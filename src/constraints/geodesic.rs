@@ -267,16 +267,29 @@ mod tests {
         worst
     }
 
+    /// Plain Dijkstra and refined distance fields from `src`, each as its largest relative
+    /// error against `exact` over nodes at least `min_d` away (printed with `label`).
+    fn plain_and_refined(
+        mesh: &Mesh,
+        src: usize,
+        exact: impl Fn(usize) -> Real,
+        min_d: Real,
+        label: &str,
+    ) -> (Real, Real) {
+        let nf = NodeFaces::new(mesh);
+        let plain = distance_field(mesh, &nf, &[src], false);
+        let refined = distance_field(mesh, &nf, &[src], true);
+        let (ep, er) = (max_rel_error(&plain, &exact, min_d), max_rel_error(&refined, &exact, min_d));
+        eprintln!("{label}: plain Dijkstra {:.2}% over, refined {:.3}%", ep * 100.0, er * 100.0);
+        (ep, er)
+    }
+
     #[test]
     fn straight_distances_on_a_flat_square() {
         let mesh = rectangle(1.0, 1.0, 20, 20).unwrap();
-        let nf = NodeFaces::new(&mesh);
         let src = 20 * 21 + 3; // top row, column 3
         let exact = |i: usize| (mesh.nodes[i].x - mesh.nodes[src].x).norm();
-        let plain = distance_field(&mesh, &nf, &[src], false);
-        let refined = distance_field(&mesh, &nf, &[src], true);
-        let (ep, er) = (max_rel_error(&plain, exact, 0.2), max_rel_error(&refined, exact, 0.2));
-        eprintln!("flat square 20×20, one source: plain Dijkstra {:.2}% over, refined {:.3}%", ep * 100.0, er * 100.0);
+        let (ep, er) = plain_and_refined(&mesh, src, exact, 0.2, "flat square 20×20, one source");
         assert!(ep > 0.03, "plain Dijkstra is expected to overestimate diagonal paths ({ep})");
         assert!(er < 0.01, "refined distances off by {er}");
     }
@@ -317,13 +330,9 @@ mod tests {
                 (corner - s).norm() + (p - corner).norm()
             }
         };
-        let plain = distance_field(&mesh, &nf, &[src], false);
-        let refined = distance_field(&mesh, &nf, &[src], true);
-        let (ep, er) = (max_rel_error(&plain, exact, 0.2), max_rel_error(&refined, exact, 0.2));
-        eprintln!("L-shaped panel 24×24: plain Dijkstra {:.2}% over, refined {:.3}%", ep * 100.0, er * 100.0);
+        let (ep, er) = plain_and_refined(&mesh, src, exact, 0.2, "L-shaped panel 24×24");
         assert!(er < 0.01, "refined distances off by {er}");
         assert!(er < ep);
-        let _ = NodeId(0);
     }
 
     /// A cylinder: a 1 × 0.5 m strip whose left and right columns are one seam (same nodes,
@@ -352,17 +361,13 @@ mod tests {
         mesh.nodes = nodes;
         mesh.rebuild_topology().unwrap();
         mesh.validate().unwrap();
-        let nf = NodeFaces::new(&mesh);
         let src = 0; // (0, 0) on the seam
         let exact = |i: usize| {
             let u = mesh.nodes[i].x; // the rectangle's plane coordinates (x, y)
             let dx = u.x.min(w - u.x);
             (dx * dx + u.y * u.y).sqrt()
         };
-        let plain = distance_field(&mesh, &nf, &[src], false);
-        let refined = distance_field(&mesh, &nf, &[src], true);
-        let (ep, er) = (max_rel_error(&plain, exact, 0.1), max_rel_error(&refined, exact, 0.1));
-        eprintln!("cylinder via a seam 30×15: plain Dijkstra {:.2}% over, refined {:.3}%", ep * 100.0, er * 100.0);
+        let (ep, er) = plain_and_refined(&mesh, src, exact, 0.1, "cylinder via a seam 30×15");
         assert!(er < 0.01, "refined distances off by {er}");
         assert!(er < ep);
     }
