@@ -315,6 +315,10 @@ pub enum UpsampleCommand {
     Train(UpsampleTrainArgs),
     /// Upsample every frame of a coarse uniform run into fine OBJ frames.
     Apply(UpsampleApplyArgs),
+    /// Loop-subdivide every frame of a coarse uniform run (the classical baseline).
+    Loop(UpsampleLoopArgs),
+    /// Run a coarse and a fine uniform shot in lockstep, the fine one tracked (paper §4).
+    Trace(UpsampleTraceArgs),
 }
 
 #[derive(clap::Args)]
@@ -351,6 +355,39 @@ pub struct UpsampleApplyArgs {
     #[arg(long, value_name = "DIR")]
     pub coarse: PathBuf,
     /// Where to write the fine frames (frame_NNNN.obj, the coarse frames' numbers).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+}
+
+#[derive(clap::Args)]
+#[command(group(clap::ArgGroup::new("depth").required(true).args(["levels", "model"])))]
+pub struct UpsampleLoopArgs {
+    /// Output directory of a coarse uniform run.
+    #[arg(long, value_name = "DIR")]
+    pub coarse: PathBuf,
+    /// Subdivision levels (each splits every face in four).
+    #[arg(long, value_name = "L")]
+    pub levels: Option<usize>,
+    /// Or: as many levels as bring the face count nearest this model's fine mesh.
+    #[arg(long, value_name = "MODEL")]
+    pub model: Option<PathBuf>,
+    /// Where to write the subdivided frames (frame_NNNN.obj, the coarse frames' numbers).
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+}
+
+#[derive(clap::Args)]
+pub struct UpsampleTraceArgs {
+    /// The coarse shot (scene file, uniform mesh).
+    #[arg(value_name = "COARSE_SCENE")]
+    pub coarse: PathBuf,
+    /// The same shot on the fine mesh (same frame timing).
+    #[arg(value_name = "FINE_SCENE")]
+    pub fine: PathBuf,
+    /// Harmonic test functions T (paper: 50–80).
+    #[arg(long = "test-functions", value_name = "T", default_value_t = 60)]
+    pub test_functions: usize,
+    /// Writes DIR/coarse/ and DIR/fine/ (frame_NNNN.obj), the training pair.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
 }

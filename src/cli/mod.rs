@@ -494,10 +494,10 @@ pub fn convert(conf: &Path, out: &Path, base: Option<&Path>) -> Result<(), CliEr
     Ok(())
 }
 
-/// `upsample train` and `upsample apply`.
+/// `upsample train`, `upsample apply` and `upsample loop`.
 pub fn upsample(cmd: UpsampleCommand) -> Result<(), CliError> {
-    use crate::upsample::run::{apply, train, RunError, TrainOptions};
-    use crate::upsample::Model;
+    use crate::upsample::run::{apply, coarse_faces, subdivide, train, RunError, TrainOptions};
+    use crate::upsample::{levels_to_match, Model};
     let cli_error = |e: RunError| match e {
         RunError::Input(m) => CliError::Input(m),
         RunError::Output(m) => CliError::Run(m),
@@ -523,6 +523,33 @@ pub fn upsample(cmd: UpsampleCommand) -> Result<(), CliError> {
             let model = Model::read(&a.model).map_err(|e| CliError::Input(e.to_string()))?;
             let n = apply(&model, &a.coarse, &a.out).map_err(cli_error)?;
             println!("{n} frames upsampled → {}", a.out.display());
+        }
+        UpsampleCommand::Loop(a) => {
+            let levels = match (a.levels, &a.model) {
+                (Some(l), _) => l,
+                (None, Some(m)) => {
+                    let model = Model::read(m).map_err(|e| CliError::Input(e.to_string()))?;
+                    levels_to_match(coarse_faces(&a.coarse).map_err(cli_error)?, model.faces.len())
+                }
+                (None, None) => return Err(CliError::Input("upsample loop: give --levels L or --model MODEL".into())),
+            };
+            let n = subdivide(&a.coarse, levels, &a.out).map_err(cli_error)?;
+            println!("{n} frames Loop-subdivided ({levels} levels) → {}", a.out.display());
+        }
+        UpsampleCommand::Trace(a) => {
+            let load = |p: &Path| -> Result<crate::scene::Scene, CliError> {
+                let loaded = scene::load_path(p, None).map_err(|e| CliError::Input(e.to_string()))?;
+                print_warnings(p, &loaded.warnings);
+                Ok(loaded.scene)
+            };
+            let (coarse, fine) = (load(&a.coarse)?, load(&a.fine)?);
+            let r = crate::upsample::track::trace(coarse, fine, a.test_functions, &a.out).map_err(cli_error)?;
+            let worst = r.residual_after.iter().copied().fold(0.0, f64::max);
+            let pull = r.residual_before.iter().copied().fold(0.0, f64::max);
+            println!(
+                "tracked {} frames ({} steps): {} coarse, {} fine nodes, {} test functions; |T p_f − T B p_c| ≤ {worst:.1e} m after each step (up to {pull:.1e} m before) → {}",
+                r.frames, r.steps, r.coarse_nodes, r.fine_nodes, a.test_functions, a.out.display()
+            );
         }
     }
     Ok(())

@@ -37,6 +37,17 @@ struct StepData {
 impl Simulation {
     /// Advances one frame (the scene's steps per frame), remeshing adaptive cloths first when due.
     pub fn advance_frame(&mut self) -> Result<(), SimError> {
+        self.begin_frame()?;
+        let h = self.scene.time_step();
+        for _ in 0..self.scene.steps_per_frame {
+            self.step(h)?;
+        }
+        Ok(())
+    }
+
+    /// The frame-start work of `advance_frame` (remeshing when due, the sparsity pattern), after
+    /// which the caller takes the frame's steps itself (`upsample trace` interleaves two runs).
+    pub fn begin_frame(&mut self) -> Result<(), SimError> {
         let every = self
             .scene
             .cloths
@@ -54,10 +65,6 @@ impl Simulation {
             self.ws.timers.since(Stage::Factorisation, clock);
         }
         self.state.frame += 1;
-        let h = self.scene.time_step();
-        for _ in 0..self.scene.steps_per_frame {
-            self.step(h)?;
-        }
         Ok(())
     }
 

@@ -6,8 +6,9 @@
 //! `embed` (the barycentric embedding B of §4), `laplacian` (cotangent Laplacian and lumped
 //! mass), `harmonics` (its lowest mass-orthonormal eigenvectors), `profile` (the polynomial
 //! damping γ_n of §3.2 and §6), `fit` (the per-row constrained least squares, eq. 5),
-//! `operator` (U and its application), `model` (the versioned model file) and `run` (training
-//! and applying over run directories).
+//! `operator` (U and its application), `model` (the versioned model file), `subdivision` (Loop
+//! subdivision, the baseline U is measured against) and `run` (training, applying and
+//! subdividing over run directories) and `track` (tracked training runs, §4).
 //!
 //! Everything assumes one coarse and one fine topology for the whole shot: train and apply on
 //! uniform (fixed-mesh) runs.
@@ -20,7 +21,9 @@ mod model;
 mod operator;
 mod profile;
 pub mod run;
+pub mod subdivision;
 mod surface;
+pub mod track;
 
 pub use embed::{embedding, Embedding};
 pub use fit::{fit, TrainingSet};
@@ -29,6 +32,7 @@ pub use laplacian::Laplacian;
 pub use model::{Model, ModelError};
 pub use operator::{Compact, Operator};
 pub use profile::Profile;
+pub use subdivision::{levels_to_match, Subdivision};
 pub use surface::Surface;
 
 /// What can go wrong building an operator; each displays as one line.
@@ -48,6 +52,8 @@ pub enum UpsampleError {
     BadFrame { frame: usize, what: String },
     #[error("no training frames")]
     NoFrames,
+    #[error("{levels} subdivision levels asked, at most {max} (4^levels faces per coarse face)")]
+    TooManyLevels { levels: usize, max: usize },
     #[error("non-finite value in {what}")]
     NonFinite { what: &'static str },
 }

@@ -1,12 +1,14 @@
-//! Training and applying over run directories (`upsample train`, `upsample apply`): OBJ frames
-//! in, a model or OBJ frames out. Both need one topology for the whole shot (uniform runs): a
-//! frame whose node or face count differs from the first is refused, naming it.
+//! Training, applying and subdividing over run directories (`upsample train`, `upsample apply`,
+//! `upsample loop`): OBJ frames in, a model or OBJ frames out. All need one topology for the
+//! whole shot (uniform runs): a frame whose node or face count differs from the first is refused,
+//! naming it.
 
+use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use super::{fit, Compact, Harmonics, Laplacian, Model, Profile, Surface, TrainingSet};
-use crate::io::obj::{read_obj, ObjData};
+use super::{fit, Compact, Harmonics, Laplacian, Model, Profile, Subdivision, Surface, TrainingSet};
+use crate::io::obj::{read_obj, Corner, ObjData};
 use crate::io::write_atomic;
 use crate::math::{Real, Vec3};
 use crate::render::run_dir::frame_numbers;
@@ -87,10 +89,55 @@ pub fn apply(model: &Model, coarse: &Path, out: &Path) -> Result<usize, RunError
     for &k in &numbers {
         let fine = compact.apply(&coarse_positions(model, coarse, k)?);
         let path = frame_path(out, k);
-        write_atomic(&path, fine_obj(model, &fine).as_bytes())
+        write_atomic(&path, obj_text("upsampled", &fine, &model.texcoords, &model.faces).as_bytes())
             .map_err(|e| RunError::Output(format!("{}: {e}", path.display())))?;
     }
     Ok(numbers.len())
+}
+
+/// Loop-subdivides (`levels` levels) every frame of the uniform run `coarse` into `out`
+/// (frame_NNNN.obj, same numbers); returns the count. The baseline U is measured against.
+pub fn subdivide(coarse: &Path, levels: usize, out: &Path) -> Result<usize, RunError> {
+    let numbers = frame_numbers(coarse).map_err(|e| RunError::Input(e.to_string()))?;
+    let first = read_frame(coarse, numbers[0])?;
+    let surface = Surface::from_obj(&first).map_err(|e| input(&frame_path(coarse, numbers[0]), e))?;
+    let sub = Subdivision::new(&surface, levels).map_err(|e| RunError::Input(e.to_string()))?;
+    let (texcoords, faces) = corners(&sub.surface);
+    std::fs::create_dir_all(out).map_err(|e| RunError::Output(format!("{}: {e}", out.display())))?;
+    for &k in &numbers {
+        let x = sub.apply(&positions_like(coarse, k, &first)?);
+        let path = frame_path(out, k);
+        write_atomic(&path, obj_text("Loop-subdivided", &x, &texcoords, &faces).as_bytes())
+            .map_err(|e| RunError::Output(format!("{}: {e}", path.display())))?;
+    }
+    Ok(numbers.len())
+}
+
+/// The face count of the first frame of the run in `dir`.
+pub fn coarse_faces(dir: &Path) -> Result<usize, RunError> {
+    let numbers = frame_numbers(dir).map_err(|e| RunError::Input(e.to_string()))?;
+    Ok(read_frame(dir, numbers[0])?.triangles.len())
+}
+
+/// A surface's material coordinates as OBJ texture coordinates (equal ones shared) and faces.
+fn corners(s: &Surface) -> (Vec<crate::math::Vec2>, Vec<[Corner; 3]>) {
+    let mut index: HashMap<(u64, u64), usize> = HashMap::new();
+    let mut texcoords = Vec::new();
+    let faces = s
+        .faces
+        .iter()
+        .zip(&s.uv)
+        .map(|(t, uv)| {
+            [0, 1, 2].map(|k| {
+                let vt = *index.entry((uv[k].x.to_bits(), uv[k].y.to_bits())).or_insert_with(|| {
+                    texcoords.push(uv[k]);
+                    texcoords.len() - 1
+                });
+                Corner { v: t[k], vt: Some(vt) }
+            })
+        })
+        .collect();
+    (texcoords, faces)
 }
 
 /// Coarse frame `k`'s positions, refused unless it has the model's coarse node count.
@@ -132,17 +179,17 @@ fn positions_like(dir: &Path, number: usize, first: &ObjData) -> Result<Vec<Vec3
     Ok(obj.positions)
 }
 
-/// The upsampled frame as OBJ: positions from U, texture coordinates and faces from the model.
-fn fine_obj(model: &Model, x: &[Vec3]) -> String {
-    let mut s = String::with_capacity(x.len() * 40 + model.texcoords.len() * 28 + model.faces.len() * 24);
-    s.push_str("# viewcloth upsampled frame\n");
+/// A fine frame as OBJ: positions, texture coordinates and faces.
+fn obj_text(what: &str, x: &[Vec3], texcoords: &[crate::math::Vec2], faces: &[[Corner; 3]]) -> String {
+    let mut s = String::with_capacity(x.len() * 40 + texcoords.len() * 28 + faces.len() * 24);
+    let _ = writeln!(s, "# viewcloth {what} frame");
     for p in x {
         let _ = writeln!(s, "v {:.9} {:.9} {:.9}", p.x, p.y, p.z);
     }
-    for t in &model.texcoords {
+    for t in texcoords {
         let _ = writeln!(s, "vt {:.9} {:.9}", t.x, t.y);
     }
-    for f in &model.faces {
+    for f in faces {
         let c = f.map(|c| (c.v + 1, c.vt.unwrap_or(0) + 1));
         let _ = writeln!(s, "f {}/{} {}/{} {}/{}", c[0].0, c[0].1, c[1].0, c[1].1, c[2].0, c[2].1);
     }
