@@ -184,3 +184,61 @@ fn compare_without_a_camera_is_refused_in_one_line() {
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--size"));
 }
+
+/// The shot's sheet on a uniform `cells` × `cells` mesh (no remesh block), held at the same
+/// two corners.
+fn uniform_shot(dir: &Path, cells: usize) -> PathBuf {
+    let text = std::fs::read_to_string(shot(dir)).unwrap();
+    let remesh = text.lines().find(|l| l.contains("\"remesh\"")).unwrap().to_owned() + "\n";
+    let (left, right) = (cells * (cells + 1), (cells + 1) * (cells + 1) - 1);
+    let text = text
+        .replace(&remesh, "")
+        .replace("[6, 6]", &format!("[{cells}, {cells}]"))
+        .replace("[42, 48]", &format!("[{left}, {right}]"));
+    let file = dir.join(format!("uniform_{cells}.json"));
+    std::fs::write(&file, text).unwrap();
+    file
+}
+
+/// `--upsample MODEL --coarse SCENE` adds a uniform coarse run, its upsampling by the model and
+/// its Loop subdivision as modes, each timed as the coarse run plus its own pass; a coarse
+/// scene on another mesh than the model's is refused in one line that says why.
+#[test]
+fn compare_measures_upsampled_and_loop_runs_beside_the_modes() {
+    let dir = temp_dir("upsample");
+    let [coarse, fine] = [3, 12].map(|n| uniform_shot(&dir, n));
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    let (pair, model) = (dir.join("pair"), dir.join("model.bin"));
+    let (pc, pf, m) = (s(&pair.join("coarse")), s(&pair.join("fine")), s(&model));
+    for args in [
+        vec!["upsample", "trace", &s(&coarse), &s(&fine), "--test-functions", "10", "--out", &s(&pair)],
+        vec!["upsample", "train", "--coarse", &pc, "--fine", &pf, "--gamma1", "0.01", "--gammaN", "10", "--out", &m],
+    ] {
+        let o = viewcloth(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    let out = dir.join("out");
+    let base = ["compare", &s(&shot(&dir)), "--modes", "adaptive", "--no-floor", "--size", "160x90", "--quiet"];
+    let r = compare(&[&base[..], &["--out", &s(&out), "--upsample", &s(&model), "--coarse", &s(&coarse)]].concat());
+    let modes = r["modes"].as_array().unwrap();
+    let names: Vec<&str> = modes.iter().map(|m| m["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["adaptive", "coarse", "upsampled", "loop"]);
+    let faces: Vec<f64> = modes[1..].iter().map(|m| m["mean_faces"].as_f64().unwrap()).collect();
+    // 3 × 3 cells: 18 faces; the model's 12 × 12: 288; two Loop levels: 18 · 16 = 288.
+    assert_eq!(faces, [18.0, 288.0, 288.0]);
+    let wall = |k: usize| modes[k]["wall_s"].as_f64().unwrap();
+    assert!(wall(2) > wall(1) && wall(3) > wall(1), "derived runs cost the coarse run and more");
+    for m in modes {
+        assert_eq!(m["errors"]["frames_compared"], 12, "{}", m["name"]);
+        assert!(err(m, "geometric", "mean") > 0.0 && err(m, "geometric", "mean") < 0.1, "{}", m["name"]);
+    }
+    assert!(std::fs::read_to_string(out.join("compare.md")).unwrap().contains("| upsampled |"));
+    // The model applied to a run on another coarse mesh.
+    let other = uniform_shot(&dir, 4);
+    let bad = dir.join("bad");
+    let o = viewcloth(&[&base[..], &["--out", &s(&bad), "--upsample", &s(&model), "--coarse", &s(&other)]].concat());
+    assert_eq!(o.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
+    assert!(e.contains("25 nodes, the model was trained on 16") && e.contains("an adaptive run?"), "{e}");
+}

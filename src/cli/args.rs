@@ -224,6 +224,13 @@ pub struct CompareArgs {
     /// error-against-time plot that a coarser uniform mesh would give).
     #[arg(long)]
     pub sweep: bool,
+    /// A model from `upsample train`: adds the modes `coarse`, `upsampled` and `loop`, built from
+    /// a uniform run of --coarse.
+    #[arg(long, value_name = "MODEL", requires = "coarse")]
+    pub upsample: Option<PathBuf>,
+    /// The shot on the model's coarse mesh (a scene file), for --upsample.
+    #[arg(long, value_name = "SCENE", requires = "upsample")]
+    pub coarse: Option<PathBuf>,
     /// Image size of the visible error, WIDTHxHEIGHT.
     #[arg(long, default_value = "960x540")]
     pub size: String,

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use crate::camera::Camera;
 use crate::collision::crossings::{find_crossings, Soup};
-use crate::compare::{compare, markdown, CompareOptions};
+use crate::compare::{compare, markdown, CompareOptions, UpsampleOptions};
 use crate::error::InputError;
 use crate::io::OutputFormat;
 use crate::math::Vec3;
@@ -234,6 +234,14 @@ pub fn compare_modes(args: CompareArgs) -> Result<(), CliError> {
     };
     let shot = shot::resolve(&request)?;
     print_warnings(&args.scene, &shot.warnings);
+    let upsample = match (&args.upsample, &args.coarse) {
+        (Some(model), Some(coarse)) => {
+            let loaded = scene::load_path(coarse, None).map_err(|e| CliError::Input(e.to_string()))?;
+            print_warnings(coarse, &loaded.warnings);
+            Some(UpsampleOptions { model: model.clone(), coarse: loaded.scene })
+        }
+        _ => None,
+    };
     let opts = CompareOptions {
         out_dir: args.out.unwrap_or_else(|| Path::new("out").join(format!("{}-compare", shot.stem))),
         frames: args.frames.map(|f| f as usize),
@@ -246,6 +254,7 @@ pub fn compare_modes(args: CompareArgs) -> Result<(), CliError> {
         every: args.every as usize,
         quiet: args.quiet,
         progress: ProgressMode::choose(args.progress.as_deref(), args.quiet),
+        upsample,
     };
     let report = compare(shot.scene, &opts)?;
     print!("{}", markdown(&report));
@@ -533,7 +542,7 @@ pub fn upsample(cmd: UpsampleCommand) -> Result<(), CliError> {
                 }
                 (None, None) => return Err(CliError::Input("upsample loop: give --levels L or --model MODEL".into())),
             };
-            let n = subdivide(&a.coarse, levels, &a.out).map_err(cli_error)?;
+            let (n, _) = subdivide(&a.coarse, levels, &a.out).map_err(cli_error)?;
             println!("{n} frames Loop-subdivided ({levels} levels) → {}", a.out.display());
         }
         UpsampleCommand::Trace(a) => {

@@ -18,6 +18,7 @@
 mod floor;
 mod report;
 mod strip;
+mod upsampled;
 
 use std::path::{Path, PathBuf};
 
@@ -37,6 +38,7 @@ use crate::sim::{run_shot, Jitter, RunError, RunOptions};
 
 pub use floor::{floor_band, verdicts, FloorBand, MeasureBand, Verdict, MEASURES};
 pub use report::{markdown, svg_curves, svg_plot};
+pub use upsampled::UpsampleOptions;
 
 /// Size (m) of the random displacement of every initial node in the chaos-floor runs.
 pub const FLOOR_PERTURBATION: Real = 1e-6;
@@ -68,6 +70,8 @@ pub struct CompareOptions {
     pub quiet: bool,
     /// How the runs report their frames.
     pub progress: ProgressMode,
+    /// Adds the modes `coarse`, `upsampled` and `loop` (`upsampled.rs`).
+    pub upsample: Option<UpsampleOptions>,
 }
 
 /// The error of one run against the reference in one frame.
@@ -190,6 +194,9 @@ pub fn compare(scene: Scene, opts: &CompareOptions) -> Result<CompareReport, Run
     }
     for k in SWEEP.iter().filter(|_| opts.sweep) {
         modes.push(simulate_scaled(&format!("uniform_{k}x"), RemeshMode::Uniform, None, *k)?);
+    }
+    if let Some(up) = &opts.upsample {
+        modes.extend(upsampled::runs(up, opts)?);
     }
     let bodies: Vec<ObstacleBody> = scene.obstacles.iter().map(ObstacleBody::new).collect();
     for r in floors.iter_mut().chain(modes.iter_mut()) {

@@ -96,8 +96,9 @@ pub fn apply(model: &Model, coarse: &Path, out: &Path) -> Result<usize, RunError
 }
 
 /// Loop-subdivides (`levels` levels) every frame of the uniform run `coarse` into `out`
-/// (frame_NNNN.obj, same numbers); returns the count. The baseline U is measured against.
-pub fn subdivide(coarse: &Path, levels: usize, out: &Path) -> Result<usize, RunError> {
+/// (frame_NNNN.obj, same numbers); returns the frame and node counts. The baseline U is
+/// measured against.
+pub fn subdivide(coarse: &Path, levels: usize, out: &Path) -> Result<(usize, usize), RunError> {
     let numbers = frame_numbers(coarse).map_err(|e| RunError::Input(e.to_string()))?;
     let first = read_frame(coarse, numbers[0])?;
     let surface = Surface::from_obj(&first).map_err(|e| input(&frame_path(coarse, numbers[0]), e))?;
@@ -110,7 +111,7 @@ pub fn subdivide(coarse: &Path, levels: usize, out: &Path) -> Result<usize, RunE
         write_atomic(&path, obj_text("Loop-subdivided", &x, &texcoords, &faces).as_bytes())
             .map_err(|e| RunError::Output(format!("{}: {e}", path.display())))?;
     }
-    Ok(numbers.len())
+    Ok((numbers.len(), sub.rows.len()))
 }
 
 /// The face count of the first frame of the run in `dir`.
