@@ -348,6 +348,9 @@ pub struct UpsampleTrainArgs {
     /// Exponent of the damping profile γ_n = a(1 + b(n−1)/N)^c (paper §6: 4).
     #[arg(long, default_value_t = 4.0)]
     pub c: f64,
+    /// Oscillatory mode pairs fitted to the residual travelling waves (paper §5; 0: none).
+    #[arg(long, value_name = "K", default_value_t = 0)]
+    pub oscillatory: usize,
     /// The model file to write.
     #[arg(long)]
     pub out: PathBuf,

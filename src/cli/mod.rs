@@ -513,13 +513,25 @@ pub fn upsample(cmd: UpsampleCommand) -> Result<(), CliError> {
     };
     match cmd {
         UpsampleCommand::Train(a) => {
-            let opts = TrainOptions { modes: a.modes, gamma1: a.gamma1, gamma_n: a.gamma_n, c: a.c };
+            let opts = TrainOptions {
+                modes: a.modes,
+                gamma1: a.gamma1,
+                gamma_n: a.gamma_n,
+                c: a.c,
+                oscillatory: a.oscillatory,
+            };
             let start = std::time::Instant::now();
             let (model, r) = train(&a.coarse, &a.fine, &opts).map_err(cli_error)?;
             crate::io::write_atomic(&a.out, &model.to_bytes())
                 .map_err(|e| CliError::Run(format!("{}: {e}", a.out.display())))?;
+            let periods: Vec<String> =
+                r.oscillatory.iter().map(|t| format!("{:.2}", 2.0 * std::f64::consts::PI / t)).collect();
+            let osc = match periods.is_empty() {
+                true => String::new(),
+                false => format!(", oscillatory pairs of period {} frames", periods.join(", ")),
+            };
             println!(
-                "trained on {} frames: {} coarse → {} fine nodes, {} harmonics, {:.1} s → {}",
+                "trained on {} frames: {} coarse → {} fine nodes, {} harmonics{osc}, {:.1} s → {}",
                 r.frames,
                 r.coarse_nodes,
                 r.fine_nodes,

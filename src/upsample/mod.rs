@@ -6,7 +6,7 @@
 //! `embed` (the barycentric embedding B of §4), `laplacian` (cotangent Laplacian and lumped
 //! mass), `harmonics` (its lowest mass-orthonormal eigenvectors), `profile` (the polynomial
 //! damping γ_n of §3.2 and §6), `fit` (the per-row constrained least squares, eq. 5),
-//! `operator` (U and its application), `model` (the versioned model file), `subdivision` (Loop
+//! `operator` (U and its application), `oscillatory` (the travelling-wave modes of §5), `model` (the versioned model file), `subdivision` (Loop
 //! subdivision, the baseline U is measured against) and `run` (training, applying and
 //! subdividing over run directories) and `track` (tracked training runs, §4).
 //!
@@ -19,6 +19,7 @@ mod harmonics;
 mod laplacian;
 mod model;
 mod operator;
+pub mod oscillatory;
 mod profile;
 pub mod run;
 pub mod subdivision;
@@ -31,6 +32,7 @@ pub use harmonics::Harmonics;
 pub use laplacian::Laplacian;
 pub use model::{Model, ModelError};
 pub use operator::{Compact, Operator};
+pub use oscillatory::OscillatoryMode;
 pub use profile::Profile;
 pub use subdivision::{levels_to_match, Subdivision};
 pub use surface::Surface;

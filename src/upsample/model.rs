@@ -1,22 +1,25 @@
-//! The model file `upsample train` writes and `upsample apply` reads: U and the fine mesh it
-//! produces (faces and material coordinates, to write the fine OBJ frames), behind a versioned
-//! header. Little-endian throughout:
+//! The model file `upsample train` writes and `upsample apply` reads: U, the fine mesh it
+//! produces (faces and material coordinates, to write the fine OBJ frames) and the oscillatory
+//! modes (§5), behind a versioned header. Little-endian throughout:
 //!
 //! ```text
-//! magic "VCUPSMPL" | version u32 (1) | M u64 | N u64 | T u64 (fine texcoords) | F u64 (fine faces)
-//! T × (u, v) f64 | F × 3 × (v, vt) u32 | U: N × M f64, column-major
+//! magic "VCUPSMPL" | version u32 (2) | M u64 | N u64 | T u64 (fine texcoords) | F u64 (fine faces)
+//! | K u64 (oscillatory pairs)
+//! T × (u, v) f64 | F × 3 × (v, vt) u32 | U: N × M f64, column-major | K × (θ f64, N × (e₁, e₂) f64)
 //! ```
+//!
+//! Version 1 (no K, no modes) is still read, as a model without oscillatory modes.
 
 use std::path::Path;
 
 use nalgebra::DMatrix;
 
-use super::Operator;
+use super::{Operator, OscillatoryMode};
 use crate::io::obj::{Corner, ObjData};
 use crate::math::{Real, Vec2};
 
 const MAGIC: &[u8; 8] = b"VCUPSMPL";
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 
 /// An operator with the fine mesh it outputs.
 #[derive(Clone, Debug, PartialEq)]
@@ -25,13 +28,15 @@ pub struct Model {
     /// Fine faces (`v` and `vt` indices) and texture coordinates; positions come from U.
     pub texcoords: Vec<Vec2>,
     pub faces: Vec<[Corner; 3]>,
+    /// Oscillatory mode pairs (§5), added along the upsampled normals; may be empty.
+    pub modes: Vec<OscillatoryMode>,
 }
 
 #[derive(Debug, thiserror::Error)]
 pub enum ModelError {
     #[error("{0}: not a viewcloth upsampling model (bad magic)")]
     Magic(String),
-    #[error("{0}: model version {1}, this viewcloth reads version {VERSION}")]
+    #[error("{0}: model version {1}, this viewcloth reads versions 1 and {VERSION}")]
     Version(String, u32),
     #[error("{0}: truncated or oversized model ({1})")]
     Size(String, String),
@@ -43,15 +48,22 @@ pub enum ModelError {
 
 impl Model {
     pub fn from_fine_obj(op: Operator, fine: &ObjData) -> Model {
-        Model { op, texcoords: fine.texcoords.clone(), faces: fine.triangles.clone() }
+        Model { op, texcoords: fine.texcoords.clone(), faces: fine.triangles.clone(), modes: Vec::new() }
+    }
+
+    /// The fine faces as node triangles (for normals).
+    pub fn triangles(&self) -> Vec<[usize; 3]> {
+        self.faces.iter().map(|f| f.map(|c| c.v)).collect()
     }
 
     pub fn to_bytes(&self) -> Vec<u8> {
         let (n, m) = (self.op.fine_nodes(), self.op.coarse_nodes());
-        let mut b = Vec::with_capacity(48 + 16 * self.texcoords.len() + 24 * self.faces.len() + 8 * n * m);
+        let k = self.modes.len();
+        let mut b =
+            Vec::with_capacity(52 + 16 * self.texcoords.len() + 24 * self.faces.len() + 8 * n * (m + 2 * k) + 8 * k);
         b.extend_from_slice(MAGIC);
         b.extend_from_slice(&VERSION.to_le_bytes());
-        for x in [m, n, self.texcoords.len(), self.faces.len()] {
+        for x in [m, n, self.texcoords.len(), self.faces.len(), k] {
             b.extend_from_slice(&(x as u64).to_le_bytes());
         }
         for t in &self.texcoords {
@@ -64,6 +76,12 @@ impl Model {
         }
         for x in self.op.u.iter() {
             b.extend_from_slice(&x.to_le_bytes());
+        }
+        for mode in &self.modes {
+            b.extend_from_slice(&mode.theta.to_le_bytes());
+            for x in mode.e.iter().flatten() {
+                b.extend_from_slice(&x.to_le_bytes());
+            }
         }
         b
     }
@@ -80,18 +98,23 @@ impl Model {
             return Err(ModelError::Magic(name.into()));
         }
         let version = u32::from_le_bytes(b[8..12].try_into().unwrap_or_default());
-        if version != VERSION {
+        if version != 1 && version != VERSION {
             return Err(ModelError::Version(name.into(), version));
         }
         let mut r = Reader { b, at: 12 };
         let size = |what: &str| ModelError::Size(name.into(), what.into());
-        let [m, n, t, f] = [0; 4].map(|_| r.u64().map(|x| x as usize));
-        let (m, n, t, f) =
-            (m.ok_or(size("header"))?, n.ok_or(size("header"))?, t.ok_or(size("header"))?, f.ok_or(size("header"))?);
-        let expect = [16u128 * t as u128, 24 * f as u128, 8 * n as u128 * m as u128].iter().sum::<u128>() + 44;
+        let header = if version == 1 { 4 } else { 5 };
+        let counts: Vec<usize> =
+            (0..header).map(|_| r.u64().map(|x| x as usize)).collect::<Option<_>>().ok_or(size("header"))?;
+        let (m, n, t, f, k) = (counts[0], counts[1], counts[2], counts[3], counts.get(4).copied().unwrap_or(0));
+        let (n128, k128) = (n as u128, k as u128);
+        let expect =
+            [16 * t as u128, 24 * f as u128, 8 * n128 * m as u128, k128 * (8 + 16 * n128)].iter().sum::<u128>()
+                + 12
+                + 8 * header as u128;
         if expect != b.len() as u128 {
             return Err(size(&format!(
-                "{} bytes for M {m}, N {n}, {t} texcoords, {f} faces; expected {expect}",
+                "{} bytes for M {m}, N {n}, {t} texcoords, {f} faces, {k} oscillatory pairs; expected {expect}",
                 b.len()
             )));
         }
@@ -103,10 +126,16 @@ impl Model {
             return Err(corrupt(format!("face corner {}/{} out of range", c.v, c.vt.unwrap_or(0))));
         }
         let u = DMatrix::from_iterator(n, m, (0..n * m).map(|_| r.f64()));
-        if u.iter().any(|x| !x.is_finite()) || texcoords.iter().any(|p| !p.iter().all(|c| c.is_finite())) {
+        let modes: Vec<OscillatoryMode> = (0..k)
+            .map(|_| OscillatoryMode { theta: r.f64(), e: (0..n).map(|_| [r.f64(), r.f64()]).collect() })
+            .collect();
+        let finite = u.iter().all(|x| x.is_finite())
+            && texcoords.iter().all(|p| p.iter().all(|c| c.is_finite()))
+            && modes.iter().all(|md| md.theta.is_finite() && md.e.iter().flatten().all(|x| x.is_finite()));
+        if !finite {
             return Err(corrupt("non-finite value".into()));
         }
-        Ok(Model { op: Operator::new(u), texcoords, faces })
+        Ok(Model { op: Operator::new(u), texcoords, faces, modes })
     }
 }
 
@@ -141,7 +170,8 @@ mod tests {
         let u = DMatrix::from_fn(4, 3, |i, j| (i * 3 + j) as Real / 7.0);
         let texcoords = vec![Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 1.0), Vec2::new(1.0, 1.0)];
         let c = |v| Corner { v, vt: Some(v) };
-        Model { op: Operator::new(u), texcoords, faces: vec![[c(0), c(1), c(2)], [c(1), c(3), c(2)]] }
+        let modes = vec![OscillatoryMode { theta: 0.4, e: (0..4).map(|i| [0.01 * i as Real, -0.02]).collect() }];
+        Model { op: Operator::new(u), texcoords, faces: vec![[c(0), c(1), c(2)], [c(1), c(3), c(2)]], modes }
     }
 
     #[test]
@@ -155,16 +185,33 @@ mod tests {
         let b = model().to_bytes();
         let err = |b: &[u8]| Model::from_bytes(b, "m.bin").unwrap_err().to_string();
         assert!(err(b"hello").contains("not a viewcloth upsampling model"));
-        let mut v2 = b.clone();
-        v2[8] = 2;
-        assert!(err(&v2).contains("version 2"));
+        let mut v3 = b.clone();
+        v3[8] = 3;
+        assert!(err(&v3).contains("version 3, this viewcloth reads versions 1 and 2"));
         assert!(err(&b[..b.len() - 1]).contains("truncated"));
         let mut huge = b.clone();
         huge[12..20].copy_from_slice(&u64::MAX.to_le_bytes());
         assert!(err(&huge).contains("truncated"));
         let mut bad_face = b.clone();
-        bad_face[44 + 16 * 4..48 + 16 * 4].copy_from_slice(&99u32.to_le_bytes());
+        bad_face[52 + 16 * 4..56 + 16 * 4].copy_from_slice(&99u32.to_le_bytes());
         assert!(err(&bad_face).contains("out of range"));
-        assert!([err(b"hello"), err(&v2)].iter().all(|e| !e.contains('\n')));
+        assert!([err(b"hello"), err(&v3)].iter().all(|e| !e.contains('\n')));
+        let mut nan = b.clone();
+        let at = nan.len() - 8;
+        nan[at..].copy_from_slice(&Real::NAN.to_le_bytes());
+        assert!(err(&nan).contains("non-finite"));
+    }
+
+    /// A version 1 file (written as version 1 did: no pair count, no modes) reads as a model
+    /// without oscillatory modes.
+    #[test]
+    fn version_1_files_are_still_read() {
+        let m = Model { modes: Vec::new(), ..model() };
+        let v2 = m.to_bytes();
+        let mut v1 = v2[..8].to_vec();
+        v1.extend_from_slice(&1u32.to_le_bytes());
+        v1.extend_from_slice(&v2[12..44]); // M, N, T, F
+        v1.extend_from_slice(&v2[52..]); // K = 0 dropped
+        assert_eq!(Model::from_bytes(&v1, "m").unwrap(), m);
     }
 }

@@ -7,6 +7,9 @@ use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
+use nalgebra::{DMatrix, DVector};
+
+use super::oscillatory::{add_modes, fit_modes, normal_residual, OscillatoryMode};
 use super::{fit, Compact, Harmonics, Laplacian, Model, Profile, Subdivision, Surface, TrainingSet};
 use crate::io::obj::{read_obj, Corner, ObjData};
 use crate::io::write_atomic;
@@ -36,6 +39,8 @@ pub struct TrainOptions {
     pub gamma1: Real,
     pub gamma_n: Real,
     pub c: Real,
+    /// Oscillatory mode pairs to fit to the residual (§5; 0: none).
+    pub oscillatory: usize,
 }
 
 /// What training saw, for the closing line.
@@ -45,6 +50,8 @@ pub struct TrainReport {
     pub coarse_nodes: usize,
     pub fine_nodes: usize,
     pub modes: usize,
+    /// The oscillatory pairs fitted: θ (radians per frame) of each.
+    pub oscillatory: Vec<Real>,
 }
 
 /// Learns a model from the paired frames of a coarse and a fine run (same frame numbers).
@@ -73,8 +80,33 @@ pub fn train(coarse: &Path, fine: &Path, opts: &TrainOptions) -> Result<(Model, 
         data.fine.push(positions_like(fine, k, &f0)?);
     }
     let op = fit(&h, &profile, &data).map_err(|e| RunError::Input(e.to_string()))?;
-    let report = TrainReport { frames: numbers.len(), coarse_nodes: c0.positions.len(), fine_nodes: n, modes };
-    Ok((Model::from_fine_obj(op, &f0), report))
+    let mut model = Model::from_fine_obj(op, &f0);
+    if opts.oscillatory > 0 {
+        if numbers.windows(2).any(|w| w[1] != w[0] + 1) {
+            return Err(input(coarse, "oscillatory modes need consecutive frame numbers (one frame rate)"));
+        }
+        model.modes = oscillatory_modes(&model, &data, opts.oscillatory, numbers[0]);
+    }
+    let report = TrainReport {
+        frames: numbers.len(),
+        coarse_nodes: c0.positions.len(),
+        fine_nodes: n,
+        modes,
+        oscillatory: model.modes.iter().map(|m| m.theta).collect(),
+    };
+    Ok((model, report))
+}
+
+/// §5: D's column j is frame j's residual normal displacement after U; the pairs are fitted with
+/// frame `first` as j = 0 and then phased to the frame numbers, which `apply` uses.
+fn oscillatory_modes(model: &Model, data: &TrainingSet, pairs: usize, first: usize) -> Vec<OscillatoryMode> {
+    let triangles = model.triangles();
+    let mut d = DMatrix::zeros(model.op.fine_nodes(), data.fine.len());
+    for (j, (pc, pf)) in data.coarse.iter().zip(&data.fine).enumerate() {
+        let r = normal_residual(&model.op.apply(pc), pf, &triangles);
+        d.set_column(j, &DVector::from_vec(r));
+    }
+    fit_modes(&d, pairs).into_iter().map(|m| m.shifted(first)).collect()
 }
 
 /// Upsamples every frame of `coarse` into `out` (frame_NNNN.obj, same numbers); returns the count.
@@ -86,8 +118,10 @@ pub fn apply(model: &Model, coarse: &Path, out: &Path) -> Result<usize, RunError
     }
     std::fs::create_dir_all(out).map_err(|e| RunError::Output(format!("{}: {e}", out.display())))?;
     let mut compact = Compact::new(&model.op);
+    let triangles = model.triangles();
     for &k in &numbers {
-        let fine = compact.apply(&coarse_positions(model, coarse, k)?);
+        let mut fine = compact.apply(&coarse_positions(model, coarse, k)?);
+        add_modes(&model.modes, &mut fine, &triangles, k);
         let path = frame_path(out, k);
         write_atomic(&path, obj_text("upsampled", &fine, &model.texcoords, &model.faces).as_bytes())
             .map_err(|e| RunError::Output(format!("{}: {e}", path.display())))?;
@@ -235,7 +269,7 @@ mod tests {
         write_run(&fine, 9, 6);
         // γ competes with the spectrum of P_c P_cᵀ, which grows with the frame count: for 6
         // frames it must be far below §6's (with γ_N = 10 U is worse than barycentric here).
-        let opts = TrainOptions { modes: None, gamma1: 1e-3, gamma_n: 0.1, c: 4.0 };
+        let opts = TrainOptions { modes: None, gamma1: 1e-3, gamma_n: 0.1, c: 4.0, oscillatory: 0 };
         let (model, r) = train(&coarse, &fine, &opts).unwrap();
         assert_eq!((r.frames, r.coarse_nodes, r.fine_nodes, r.modes), (6, 16, 100, 100));
         let model = Model::from_bytes(&model.to_bytes(), "m").unwrap();
