@@ -118,3 +118,36 @@ fn upsampling_beats_loop_subdivision_on_a_held_out_motion() {
     );
     assert!(e_up < e_loop, "upsampled {e_up:e} m, Loop {e_loop:e} m");
 }
+
+/// Bad input to `upsample trace` and `upsample loop`: exit 2, one line naming the file or option
+/// and what was expected, nothing written.
+#[test]
+fn trace_and_loop_refuse_bad_input_in_one_line() {
+    let dir = temp_dir("bad_input");
+    let s = |p: &Path| p.to_str().unwrap().to_owned();
+    let (coarse, fine) = (scene(&dir, "c", 3, [&Value::Null; 2]), scene(&dir, "f", 6, [&Value::Null; 2]));
+    let shorter = std::fs::read_to_string(&fine).unwrap().replace("\"frames\":50", "\"frames\":7");
+    std::fs::write(&fine, shorter).unwrap();
+    let adaptive = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/sheet_on_sphere.json");
+    let out = dir.join("out");
+    let cases: [(Vec<String>, &str); 4] = [
+        (vec![s(&coarse), s(&fine)], "frame_time, steps_per_frame, frames, preroll and start_frame must equal"),
+        (vec![s(&adaptive), s(&coarse)], "remeshes adaptively; tracking needs uniform runs"),
+        (
+            vec![s(&coarse), s(&coarse), "--test-functions".into(), "99".into()],
+            "asked for 99 harmonics but the fine mesh has 16 nodes",
+        ),
+        (vec!["--levels".into(), "9".into()], "--levels: expected 0..=6"),
+    ];
+    for (args, want) in cases {
+        let cmd = if args[0] == "--levels" { vec!["loop", "--coarse", "nowhere"] } else { vec!["trace"] };
+        let mut all: Vec<&str> = ["upsample"].into_iter().chain(cmd).chain(args.iter().map(|a| a.as_str())).collect();
+        all.extend(["--out", out.to_str().unwrap()]);
+        let o = viewcloth(&all);
+        let e = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{all:?}: {e}");
+        assert_eq!(e.trim_end().lines().count(), 1, "{e}");
+        assert!(e.contains(want), "{all:?}: {e}");
+    }
+    assert!(!out.exists(), "a refused command wrote its output folder");
+}

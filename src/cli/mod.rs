@@ -547,6 +547,12 @@ pub fn upsample(cmd: UpsampleCommand) -> Result<(), CliError> {
         }
         UpsampleCommand::Loop(a) => {
             let levels = match (a.levels, &a.model) {
+                (Some(l), _) if l > crate::upsample::subdivision::MAX_LEVELS => {
+                    let max = crate::upsample::subdivision::MAX_LEVELS;
+                    return Err(CliError::Input(format!(
+                        "--levels: expected 0..={max} (4^L faces per coarse face), got {l}"
+                    )));
+                }
                 (Some(l), _) => l,
                 (None, Some(m)) => {
                     let model = Model::read(m).map_err(|e| CliError::Input(e.to_string()))?;
