@@ -10,6 +10,10 @@
 //! onto eq. 6's affine set along the mass-orthogonal direction, p_f ← p_f + Φ_T Φ_Tᵀ V (B p_c − p_f)
 //! (the smallest mass-weighted change that satisfies it), and the same change over the step is
 //! added to the velocities, so the next step does not undo it.
+//!
+//! One cloth per shot (B embeds through material space, where several cloths would overlap).
+//! The projection is not collision-checked: near an obstacle it can move a node inside it
+//! (tracked shots with obstacles are untested).
 
 use std::path::Path;
 
@@ -146,10 +150,15 @@ fn project(tracker: &Tracker, sc: &Simulation, sf: &mut Simulation, h: Option<Re
     }
 }
 
-/// The two shots must be one garment and motion at two resolutions: uniform meshes (one
-/// topology each), the same frame timing.
+/// The two shots must be one garment and motion at two resolutions: one cloth each, uniform
+/// meshes (one topology each), the same frame timing.
 fn check_pair(coarse: &Scene, fine: &Scene) -> Result<(), RunError> {
     for s in [coarse, fine] {
+        if s.cloths.len() != 1 {
+            // B embeds through material space, where separate cloths would overlap.
+            let msg = format!("{} cloths; tracking pairs one cloth at two resolutions", s.cloths.len());
+            return Err(RunError::Input(format!("{}: {msg}", s.file.display())));
+        }
         if let Some(c) = s.cloths.iter().find(|c| c.remesh.as_ref().is_some_and(|r| r.mode.is_adaptive())) {
             return Err(RunError::Input(format!(
                 "{}: cloth '{}' remeshes adaptively; tracking needs uniform runs (one topology each: \"mode\": \"uniform\" or no remesh block)",
