@@ -1,8 +1,9 @@
 //! Anisotropic adaptive remeshing (Narain, Samii & O'Brien 2012, §4): flip all edges, split
 //! every edge longer than 1 in the sizing metric (worst first, local flips after each), then
 //! collapse edges whose removal keeps every new edge under 0.9 (local flips after each), until
-//! nothing changes. Operations are checked values (`ops`); boundaries keep their shape, seams and
-//! handle nodes are preserved, and no flip or collapse makes the cloth cross itself (`guard`).
+//! nothing changes. Operations are checked values (`ops`); boundaries keep their shape, seams
+//! stay closed (their nodes collapse only along them, both sides together), handle nodes stay,
+//! and no flip or collapse makes the cloth cross itself (`guard`).
 
 pub mod guard;
 pub mod ops;
@@ -154,11 +155,12 @@ fn collapse_all(w: &mut Work, guard: &mut Guard, limits: &RemeshLimits, stats: &
             }
             for (i, j) in [(a, b), (b, a)] {
                 let Some(op) = ops::collapse(w, i, j) else { continue };
-                if ops::collapse_ok(w, &op, j, limits.aspect_min, COLLAPSE_MAX_LENGTH, floor)
+                if ops::collapse_ok(w, &op, limits.aspect_min, COLLAPSE_MAX_LENGTH, floor)
                     && apply_guarded(w, guard, &op)
                 {
                     collapsed += 1;
-                    flip_around(w, guard, &[j], stats);
+                    let kept: Vec<usize> = op.merged.iter().map(|&(_, t)| t).collect();
+                    flip_around(w, guard, &kept, stats);
                     break;
                 }
             }
@@ -170,5 +172,7 @@ fn collapse_all(w: &mut Work, guard: &mut Guard, limits: &RemeshLimits, stats: &
     }
 }
 
+#[cfg(test)]
+mod seam_tests;
 #[cfg(test)]
 mod tests;

@@ -15,6 +15,8 @@ pub struct Op {
     pub remove_faces: Vec<usize>,
     pub add_faces: Vec<([usize; 3], u16)>,
     pub remove_verts: Vec<usize>,
+    /// A collapse's removed verts, each with the vert it merges into.
+    pub merged: Vec<(usize, usize)>,
 }
 
 impl Op {
@@ -127,47 +129,84 @@ pub fn should_flip(w: &Work, a: usize, b: usize, threshold: Real, max_fold: Real
     s < -threshold * (cross_c + cross_d)
 }
 
-/// Collapse of vert i onto vert j along edge i–j: faces on the edge go, i's other faces take j,
-/// i (and its node) are removed. `None` when i must stay: a handle node, a seam, a boundary
-/// corner, or a collapse off the boundary, or when the link condition fails (the result would
-/// be non-manifold).
+/// Collapse of node(i) onto node(j) along the material edge i–j (Narain 2012 §4.3; ARCSim's
+/// `try_edge_collapse`): every vert of node(i) merges into the vert of node(j) beside it, its
+/// faces on the edge go and its other faces take that vert, and node(i) is removed. An interior
+/// node moves along any edge; a boundary or seam node only along its own boundary or seam, onto
+/// its neighbour on that same line, both sides of a seam together, so a boundary stays a
+/// boundary and a seam stays closed. `None` when node(i) must stay: a handle, a corner of the
+/// pattern (a boundary that turns, a node where seams meet), or when the link condition fails
+/// (the result would be non-manifold in material or world space).
 pub fn collapse(w: &Work, i: usize, j: usize) -> Option<Op> {
     let (ni, nj) = (w.vnode[i], w.vnode[j]);
-    if ni == nj || w.pinned[ni] || w.nverts[ni].len() != 1 {
+    if ni == nj || w.pinned[ni] || w.edge_faces(i, j).is_empty() {
         return None;
     }
-    let edge_faces = w.edge_faces(i, j);
-    if edge_faces.is_empty() {
-        return None;
-    }
-    let bn = w.boundary_neighbours(i);
-    if !bn.is_empty() {
-        // A boundary vert may only slide along a straight stretch of boundary.
-        if bn.len() != 2 || !bn.contains(&j) || edge_faces.len() != 1 {
+    let merged = if w.nverts[ni].len() == 1 && w.boundary_neighbours(i).is_empty() {
+        vec![(i, j)]
+    } else {
+        line_partners(w, i, j)?
+    };
+    let mut opposite_nodes = Vec::new();
+    for &(s, t) in &merged {
+        let edge_faces = w.edge_faces(s, t);
+        // Link condition: the common neighbours of s and t are exactly the edge's opposite corners.
+        let mut opp: Vec<usize> = edge_faces.iter().map(|&f| w.opposite(f, s, t)).collect();
+        opp.sort_unstable();
+        let s_set = w.neighbours(s);
+        let common: Vec<usize> = w.neighbours(t).into_iter().filter(|v| s_set.contains(v)).collect();
+        if common != opp {
             return None;
         }
-        let k = if bn[0] == j { bn[1] } else { bn[0] };
-        let (e0, e1) = (w.u[j] - w.u[i], w.u[k] - w.u[i]);
-        if cross2(&e0, &e1).abs() > 1e-9 * e0.norm() * e1.norm() || e0.dot(&e1) >= 0.0 {
-            return None;
-        }
+        opposite_nodes.extend(opp.iter().map(|&v| w.vnode[v]));
     }
-    // Link condition: the common neighbours of i and j are exactly the edge's opposite corners.
-    let mut opp: Vec<usize> = edge_faces.iter().map(|&f| w.opposite(f, i, j)).collect();
-    opp.sort_unstable();
-    let ni_set = w.neighbours(i);
-    let common: Vec<usize> = w.neighbours(j).into_iter().filter(|v| ni_set.contains(v)).collect();
-    if common != opp {
+    // The same in world space, where a seam joins panels: no node other than the opposite
+    // corners may neighbour both nodes, or an edge would gain a third face.
+    opposite_nodes.sort_unstable();
+    opposite_nodes.dedup();
+    let ni_set = w.node_neighbours(ni);
+    if w.node_neighbours(nj).into_iter().filter(|n| ni_set.contains(n)).ne(opposite_nodes) {
         return None;
     }
-    let mut op = Op { remove_verts: vec![i], ..Default::default() };
-    for &f in &w.vfaces[i] {
-        op.remove_faces.push(f);
-        if !edge_faces.contains(&f) {
-            op.add_faces.push((w.faces[f].map(|v| if v == i { j } else { v }), w.fmat[f]));
+    let mut op = Op { merged: merged.clone(), ..Default::default() };
+    for &(s, t) in &merged {
+        op.remove_verts.push(s);
+        for &f in &w.vfaces[s] {
+            op.remove_faces.push(f);
+            if !w.faces[f].contains(&t) {
+                op.add_faces.push((w.faces[f].map(|v| if v == s { t } else { v }), w.fmat[f]));
+            }
         }
     }
     Some(op)
+}
+
+/// For a boundary or seam vert i collapsing along the boundary edge i–j: each vert of node(i)
+/// with the vert of node(j) it merges into. Every vert of node(i) must lie on a straight
+/// stretch of its panel's boundary between the same two nodes (node(j) and one other), so a
+/// corner, a node where seams meet, or an edge off the line gives `None`.
+fn line_partners(w: &Work, i: usize, j: usize) -> Option<Vec<(usize, usize)>> {
+    let bn = w.boundary_neighbours(i);
+    if bn.len() != 2 || !bn.contains(&j) {
+        return None;
+    }
+    let k = if bn[0] == j { bn[1] } else { bn[0] };
+    let (nj, nk) = (w.vnode[j], w.vnode[k]);
+    if nj == nk {
+        return None;
+    }
+    let mut merged = Vec::with_capacity(w.nverts[w.vnode[i]].len());
+    for &s in &w.nverts[w.vnode[i]] {
+        let sn = w.boundary_neighbours(s);
+        let on = |n: usize| sn.iter().copied().find(|&v| w.vnode[v] == n);
+        let (Some(t), Some(r)) = (on(nj), on(nk)) else { return None };
+        let (e0, e1) = (w.u[t] - w.u[s], w.u[r] - w.u[s]);
+        if sn.len() != 2 || cross2(&e0, &e1).abs() > 1e-9 * e0.norm() * e1.norm() || e0.dot(&e1) >= 0.0 {
+            return None;
+        }
+        merged.push((s, t));
+    }
+    Some(merged)
 }
 
 /// Triangle aspect ratio 12√3·A/P² (1 for equilateral) in material space.
@@ -183,11 +222,17 @@ pub fn aspect(u: [Vec2; 3]) -> Real {
 /// Quality checks of a collapse (Narain 2012, §4.3): no new face inverted in material or world
 /// space or below the area floor, none falling below `aspect_min` (unless the face it replaces
 /// was already worse), and no new edge longer than `max_len` in the metric.
-pub fn collapse_ok(w: &Work, op: &Op, j: usize, aspect_min: Real, max_len: Real, area_floor: Real) -> bool {
-    // `collapse` adds, in order, one face for each removed face that does not hold j.
-    let replaced = op.remove_faces.iter().filter(|&&f| !w.faces[f].contains(&j));
-    for (&f, &(t, _)) in replaced.zip(&op.add_faces) {
+pub fn collapse_ok(w: &Work, op: &Op, aspect_min: Real, max_len: Real, area_floor: Real) -> bool {
+    // `collapse` adds, in order, one face for each removed face that does not hold the vert its
+    // removed corner merges into.
+    let mut added = op.add_faces.iter();
+    for &f in &op.remove_faces {
         let old = w.faces[f];
+        let Some(&(_, j)) = op.merged.iter().find(|(s, _)| old.contains(s)) else { continue };
+        if old.contains(&j) {
+            continue;
+        }
+        let Some(&(t, _)) = added.next() else { return false };
         let u = t.map(|v| op.u(w, v));
         if 0.5 * cross2(&(u[1] - u[0]), &(u[2] - u[0])) <= area_floor {
             return false;

@@ -45,7 +45,7 @@ fn random_operations_keep_the_mesh_valid() {
             let op = match rng.below(3) {
                 0 => ops::split(&w, a, b),
                 1 => ops::flip(&w, a, b),
-                _ => ops::collapse(&w, a, b).filter(|op| ops::collapse_ok(&w, op, b, 0.05, 10.0, 1e-12)),
+                _ => ops::collapse(&w, a, b).filter(|op| ops::collapse_ok(&w, op, 0.05, 10.0, 1e-12)),
             };
             if let Some(op) = op {
                 op.apply(&mut w);

@@ -99,6 +99,19 @@ impl Work {
         n
     }
 
+    /// Nodes sharing an alive face with node `n`, over all its verts (sorted, unique).
+    pub fn node_neighbours(&self, n: usize) -> Vec<usize> {
+        let mut out: Vec<usize> = self.nverts[n]
+            .iter()
+            .flat_map(|&a| self.neighbours(a))
+            .map(|v| self.vnode[v])
+            .filter(|&m| m != n)
+            .collect();
+        out.sort_unstable();
+        out.dedup();
+        out
+    }
+
     pub fn is_boundary_edge(&self, a: usize, b: usize) -> bool {
         self.edge_faces(a, b).len() == 1
     }
