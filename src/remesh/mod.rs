@@ -7,13 +7,14 @@
 
 pub mod guard;
 pub mod ops;
+pub mod rest_shape;
 pub mod work;
 
 use crate::math::{Mat2, Real};
 use crate::mesh::{Mesh, MeshError};
 use guard::Guard;
-pub use work::Finished;
 use work::Work;
+pub use work::{FaceData, Finished};
 
 /// Anti flip-flop threshold of the flip test (ARCSim's `edge_flip_threshold`).
 pub const FLIP_THRESHOLD: Real = 1e-2;
@@ -41,14 +42,17 @@ pub struct RemeshLimits {
 }
 
 /// Remeshes `mesh` to the per-vert sizing metrics `vsize`; nodes flagged in `pinned` (handles)
-/// survive. Returns the new mesh with the map from old to new node ids.
+/// survive; `shapes` are the faces' rest shape operators (`rest_shape`; empty for a flat rest
+/// shape). Returns the new mesh with the map from old to new node ids and the new faces' rest
+/// shape operators.
 pub fn remesh(
     mesh: &Mesh,
     vsize: Vec<Mat2>,
     pinned: Vec<bool>,
+    shapes: &[Mat2],
     limits: &RemeshLimits,
 ) -> Result<(Finished, RemeshStats), MeshError> {
-    let mut w = Work::new(mesh, vsize, pinned);
+    let mut w = Work::new(mesh, vsize, pinned, shapes);
     let mut stats = RemeshStats::default();
     let mut guard = Guard::new(&w);
     flip_all(&mut w, &mut guard, &mut stats);

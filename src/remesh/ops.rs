@@ -3,7 +3,7 @@
 
 use crate::math::{cross2, Mat2, Real, Vec2, Vec3};
 
-use super::work::Work;
+use super::work::{FaceData, Work};
 
 /// A local change: new nodes, new verts (ids continue the work's arrays, in order), faces
 /// removed and added (over old and new vert ids), verts removed.
@@ -13,7 +13,7 @@ pub struct Op {
     /// (material coordinate, node id — old or new —, sizing metric).
     pub new_verts: Vec<(Vec2, usize, Mat2)>,
     pub remove_faces: Vec<usize>,
-    pub add_faces: Vec<([usize; 3], u16)>,
+    pub add_faces: Vec<([usize; 3], FaceData)>,
     pub remove_verts: Vec<usize>,
     /// A collapse's removed verts, each with the vert it merges into.
     pub merged: Vec<(usize, usize)>,
@@ -53,8 +53,8 @@ fn split_face(w: &Work, f: usize, a: usize, b: usize, p: usize, op: &mut Op) {
     let (s, t) = if w.directed(f, a, b).is_some() { (a, b) } else { (b, a) };
     let k = w.opposite(f, a, b);
     op.remove_faces.push(f);
-    op.add_faces.push(([s, p, k], w.fmat[f]));
-    op.add_faces.push(([p, t, k], w.fmat[f]));
+    op.add_faces.push(([s, p, k], w.fdata[f]));
+    op.add_faces.push(([p, t, k], w.fdata[f]));
 }
 
 /// Split of material edge a–b at its midpoint (both sides of a seam with one new node). The
@@ -102,7 +102,11 @@ pub fn flip(w: &Work, a: usize, b: usize) -> Option<Op> {
     if w.area(&t0) <= floor || w.area(&t1) <= floor {
         return None;
     }
-    Some(Op { remove_faces: vec![f0, f1], add_faces: vec![(t0, w.fmat[f0]), (t1, w.fmat[f1])], ..Default::default() })
+    // The pair's rest shape, area-weighted, goes to both new faces (`rest_shape`).
+    let (a0, a1) = (w.area(&w.faces[f0]), w.area(&w.faces[f1]));
+    let shape = (a0 * w.fdata[f0].shape + a1 * w.fdata[f1].shape) / (a0 + a1);
+    let (d0, d1) = (FaceData { shape, ..w.fdata[f0] }, FaceData { shape, ..w.fdata[f1] });
+    Some(Op { remove_faces: vec![f0, f1], add_faces: vec![(t0, d0), (t1, d1)], ..Default::default() })
 }
 
 /// Anisotropic Delaunay test (Bossen & Heckbert 1996, in ARCSim's form): flip a–b when the
@@ -174,7 +178,7 @@ pub fn collapse(w: &Work, i: usize, j: usize) -> Option<Op> {
         for &f in &w.vfaces[s] {
             op.remove_faces.push(f);
             if !w.faces[f].contains(&t) {
-                op.add_faces.push((w.faces[f].map(|v| if v == s { t } else { v }), w.fmat[f]));
+                op.add_faces.push((w.faces[f].map(|v| if v == s { t } else { v }), w.fdata[f]));
             }
         }
     }

@@ -17,7 +17,7 @@ pub struct Work {
     /// Nodes that must survive (handles).
     pub pinned: Vec<bool>,
     pub faces: Vec<[usize; 3]>,
-    pub fmat: Vec<u16>,
+    pub fdata: Vec<FaceData>,
     pub falive: Vec<bool>,
     /// Alive faces around each vert.
     pub vfaces: Vec<Vec<usize>>,
@@ -25,14 +25,25 @@ pub struct Work {
     pub nverts: Vec<Vec<usize>>,
 }
 
-/// The compacted mesh and, for every old node, its new id (None if it was removed).
+/// What a face carries through remeshing besides its corners.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FaceData {
+    pub material: u16,
+    /// Rest shape operator in material space (`rest_shape`).
+    pub shape: Mat2,
+}
+
+/// The compacted mesh, for every old node its new id (None if it was removed), and every new
+/// face's rest shape operator.
 pub struct Finished {
     pub mesh: Mesh,
     pub node_map: Vec<Option<usize>>,
+    pub face_shapes: Vec<Mat2>,
 }
 
 impl Work {
-    pub fn new(mesh: &Mesh, vsize: Vec<Mat2>, pinned: Vec<bool>) -> Self {
+    /// `shapes`: each face's rest shape operator (empty: all zero, a flat rest shape).
+    pub fn new(mesh: &Mesh, vsize: Vec<Mat2>, pinned: Vec<bool>, shapes: &[Mat2]) -> Self {
         let nv = mesh.verts.len();
         let mut vfaces = vec![Vec::new(); nv];
         let faces: Vec<[usize; 3]> = mesh.faces.iter().map(|f| f.v.map(|v| v.idx())).collect();
@@ -55,7 +66,12 @@ impl Work {
             cloth: mesh.nodes.iter().map(|n| n.cloth).collect(),
             nalive: vec![true; mesh.nodes.len()],
             pinned,
-            fmat: mesh.faces.iter().map(|f| f.material).collect(),
+            fdata: (0..mesh.faces.len())
+                .map(|f| FaceData {
+                    material: mesh.faces[f].material,
+                    shape: shapes.get(f).copied().unwrap_or_else(Mat2::zeros),
+                })
+                .collect(),
             falive: vec![true; faces.len()],
             faces,
             vfaces,
@@ -159,10 +175,10 @@ impl Work {
         e
     }
 
-    pub fn add_face(&mut self, t: [usize; 3], mat: u16) -> usize {
+    pub fn add_face(&mut self, t: [usize; 3], data: FaceData) -> usize {
         let f = self.faces.len();
         self.faces.push(t);
-        self.fmat.push(mat);
+        self.fdata.push(data);
         self.falive.push(true);
         for v in t {
             self.vfaces[v].push(f);
@@ -224,13 +240,15 @@ impl Work {
                 mesh.verts.push(Vert { u: self.u[i], node: NodeId(node_id[self.vnode[i]] as u32) });
             }
         }
+        let mut face_shapes = Vec::new();
         for (f, t) in self.faces.iter().enumerate() {
             if self.falive[f] {
-                mesh.faces.push(Face { v: t.map(|v| VertId(vert_id[v] as u32)), material: self.fmat[f] });
+                mesh.faces.push(Face { v: t.map(|v| VertId(vert_id[v] as u32)), material: self.fdata[f].material });
+                face_shapes.push(self.fdata[f].shape);
             }
         }
         mesh.rebuild_topology()?;
         let node_map = (0..old_nodes).map(|i| (node_id[i] != usize::MAX).then_some(node_id[i])).collect();
-        Ok(Finished { mesh, node_map })
+        Ok(Finished { mesh, node_map, face_shapes })
     }
 }

@@ -2,11 +2,10 @@
 //! depends on the topology rebuilt afterwards (rest data, masses, the system's pattern and
 //! symbolic factorisation, handle node ids).
 
-use std::collections::HashMap;
-
 use std::time::Instant;
 
 use crate::math::{Mat2, Real};
+use crate::remesh::rest_shape::{edge_angles_from_shapes, face_shapes};
 use crate::remesh::{remesh, Finished, RemeshLimits, RemeshStats};
 use crate::scene::RemeshMode;
 use crate::sizing::view::face_views;
@@ -117,7 +116,12 @@ impl Simulation {
         let aspect_min = params.iter().flatten().map(|p| p.aspect_min).fold(1.0, Real::min);
         let limits = RemeshLimits { size_min, aspect_min, coarsen: mode.is_adaptive() };
         let preserved = self.preserved_nodes(&params);
-        let (finished, stats) = remesh(&self.state.mesh, vsize, preserved, &limits)
+        // A flat rest shape (every angle zero) stays flat without carrying it.
+        let shapes = match self.state.rest_angles.iter().any(|&a| a != 0.0) {
+            true => face_shapes(&self.state.mesh, &self.state.rest_angles),
+            false => Vec::new(),
+        };
+        let (finished, stats) = remesh(&self.state.mesh, vsize, preserved, &shapes, &limits)
             .map_err(|e| SimError::Mesh(format!("remeshing failed: {e}")))?;
         if stats.splits + stats.collapses + stats.flips > 0 {
             self.adopt(finished)?;
@@ -126,33 +130,24 @@ impl Simulation {
         Ok(stats)
     }
 
-    /// Takes a remeshed mesh: handles renumbered, rest angles carried over by node pair (new
-    /// edges rest flat), masses and rest data rebuilt, the implicit system's new pattern left
-    /// for the next step to analyse.
+    /// Takes a remeshed mesh: handles renumbered, rest angles solved from the rest shape the
+    /// faces carried through the remesh (`remesh::rest_shape`; all zero for a flat rest shape),
+    /// masses and rest data rebuilt, the implicit system's new pattern left for the next step
+    /// to analyse.
     fn adopt(&mut self, finished: Finished) -> Result<(), SimError> {
-        let Finished { mesh, node_map } = finished;
+        let Finished { mesh, node_map, face_shapes } = finished;
         let state = &mut self.state;
-        let mut old_angles: HashMap<(usize, usize), Real> = HashMap::new();
-        for (e, edge) in state.mesh.edges.iter().enumerate() {
-            if let (Some(a), Some(b)) = (node_map[edge.n[0].idx()], node_map[edge.n[1].idx()]) {
-                old_angles.insert((a.min(b), a.max(b)), state.rest_angles[e]);
-            }
-        }
+        let curved = state.rest_angles.iter().any(|&a| a != 0.0);
         for n in state.handle_nodes.iter_mut().flatten() {
             *n = node_map[*n].ok_or_else(|| SimError::Mesh("remeshing removed a handle node".into()))?;
         }
         state.mesh = mesh;
         let density: Vec<Real> = self.scene.materials.iter().map(|m| m.density).collect();
         state.mesh.compute_masses(&density);
-        state.rest_angles = state
-            .mesh
-            .edges
-            .iter()
-            .map(|e| {
-                let (a, b) = (e.n[0].idx(), e.n[1].idx());
-                old_angles.get(&(a.min(b), a.max(b))).copied().unwrap_or(0.0)
-            })
-            .collect();
+        state.rest_angles = match curved {
+            true => edge_angles_from_shapes(&state.mesh, &face_shapes),
+            false => vec![0.0; state.mesh.edges.len()],
+        };
         state.extra_pairs.clear();
         self.ws.remeshed(state)?;
         self.constraints_remeshed();
