@@ -123,14 +123,14 @@ fn flip_around(w: &mut Work, guard: &mut Guard, verts: &[usize], stats: &mut Rem
 fn split_all(w: &mut Work, guard: &mut Guard, stats: &mut RemeshStats) {
     for _ in 0..MAX_PASSES {
         let mut bad: Vec<(Real, usize, usize)> =
-            w.edges().into_iter().map(|(a, b)| (w.metric_length(a, b), a, b)).filter(|e| e.0 > 1.0).collect();
+            w.edges().into_iter().map(|(a, b)| (w.split_length(a, b), a, b)).filter(|e| e.0 > 1.0).collect();
         if bad.is_empty() {
             return;
         }
         // Worst first; ties by ids for determinism.
         bad.sort_unstable_by(|x, y| y.0.total_cmp(&x.0).then((x.1, x.2).cmp(&(y.1, y.2))));
         for (_, a, b) in bad {
-            if !(w.valive[a] && w.valive[b]) || w.metric_length(a, b) <= 1.0 {
+            if !(w.valive[a] && w.valive[b]) || w.split_length(a, b) <= 1.0 {
                 continue;
             }
             let Some(op) = ops::split(w, a, b) else { continue };

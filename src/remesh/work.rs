@@ -158,6 +158,16 @@ impl Work {
         e.dot(&(m * e)).max(0.0).sqrt()
     }
 
+    /// The metric length that decides a split: on a seam, where one split cuts both sides, the
+    /// mean of the two sides' lengths (ARCSim's `edge_metric` of a seam edge).
+    pub fn split_length(&self, a: usize, b: usize) -> Real {
+        let l = self.metric_length(a, b);
+        match self.edge_faces(a, b).len() == 1 {
+            true => self.seam_partner(a, b).map_or(l, |(c, d)| 0.5 * (l + self.metric_length(c, d))),
+            false => l,
+        }
+    }
+
     /// Every alive material edge once, as (a, b) with a < b, in a deterministic order.
     pub fn edges(&self) -> Vec<(usize, usize)> {
         let mut e: Vec<(usize, usize)> = Vec::with_capacity(self.faces.len() * 3 / 2);
