@@ -34,6 +34,15 @@ pub struct CollisionCounters {
     pub cap_hits: usize,
     /// Zones whose projection had no solution.
     pub failed_zones: usize,
+    /// Friction contacts sticking and sliding at the accepted solves.
+    pub sticking: usize,
+    pub sliding: usize,
+    /// Solves and factorisations beyond the first that friction's mode changes took.
+    pub friction_resolves: usize,
+    pub friction_refactors: usize,
+    /// Steps ending with friction contacts not in the mode Coulomb's law gives them
+    /// (`friction::MAX_REFACTORS`, `friction::MAX_SOLVES`).
+    pub friction_unconverged: usize,
 }
 
 pub struct CollisionWorld {
