@@ -230,10 +230,10 @@ impl Friction {
                 let (fn0, vt) = frame.kinematics(&c, frame.v0);
                 let speed = vt.norm();
                 c.cap = if c.coupled { Real::INFINITY } else { c.m_eff * speed / frame.h };
-                let guess = match stuck.is_empty() {
-                    true => speed <= c.mu * fn0 * frame.h / c.m_eff,
-                    false => stuck.binary_search(&c.nodes).is_ok(),
-                };
+                // Stuck at the previous step, or slow enough for μ f_n to stop within the step
+                // (a contact new at this step: sliding at a force that stops it several times
+                // over would reverse it).
+                let guess = stuck.binary_search(&c.nodes).is_ok() || speed <= c.mu * fn0 * frame.h / c.m_eff;
                 c.mode = match c.coupled && guess {
                     true => Mode::Stick,
                     false => Mode::Slide(frame.slide(&c, vt, (c.mu * fn0).min(c.cap))),
@@ -324,22 +324,21 @@ impl Friction {
         change
     }
 
-    /// The work h Σᵢ fᵢ · vᵢ the friction forces of the current modes do on the free cloth nodes
-    /// at the solved velocities `v` (an upper bound of their kinetic-energy change under
-    /// backward Euler). Positive only where a moving obstacle or handle drags the cloth.
-    pub fn work(&self, frame: &FrictionFrame, v: &[Vec3]) -> Real {
+    /// The work friction may do on the cloth over the step: h Σ max(0, −f · o) over the
+    /// contacts, o = Σ wⱼ vⱼ over a contact's obstacle points. Friction dissipates relative
+    /// motion (f · v_rel ≤ 0), so the power it puts into the cloth, f · (v_rel − o), is at most
+    /// the drag −f · o of a moving obstacle; on a static obstacle or between cloth layers it is
+    /// none. A step whose friction did more work than this (a sliding force that overshot and
+    /// now pushes along the relative motion) fails the energy check instead of being excused.
+    pub fn drag_work(&self, frame: &FrictionFrame, v: &[Vec3]) -> Real {
         let n = frame.x0.len();
-        let mut work = 0.0;
-        for c in &self.contacts {
-            let force = frame.force(c, v);
-            for j in 0..4 {
-                let i = c.nodes[j];
-                if i < n && frame.inv_mass[i] > 0.0 {
-                    work += frame.h * c.w[j] * force.dot(&v[i]);
-                }
-            }
-        }
-        work
+        self.contacts
+            .iter()
+            .map(|c| {
+                let o: Vec3 = (0..4).filter(|&j| c.nodes[j] >= n).map(|j| c.w[j] * frame.fixed_v[c.nodes[j] - n]).sum();
+                frame.h * (-frame.force(c, v).dot(&o)).max(0.0)
+            })
+            .sum()
     }
 
     /// The sticking contacts' participants, sorted (the next step's first guess).
@@ -467,7 +466,7 @@ mod tests {
     }
 
     #[test]
-    fn friction_work_is_positive_only_when_a_moving_obstacle_drags() {
+    fn friction_may_do_work_only_where_a_moving_obstacle_drags() {
         let x0 = [Vec3::new(0.0, 0.0, 1e-3)];
         let v = [Vec3::new(0.5, 0.0, 0.0)];
         for (fixed_v, positive) in [(Vec3::zeros(), false), (Vec3::new(1.0, 0.0, 0.0), true)] {
@@ -481,7 +480,7 @@ mod tests {
             };
             let c = FrictionContact::new([0, 1, 0, 0], [1.0, -1.0, 0.0, 0.0], Vec3::z(), 2e-3, 1000.0, 0.5);
             let f = Friction::new(std::iter::once(c), &frame, |_| true, &[]);
-            assert_eq!(f.work(&frame, &v) > 0.0, positive);
+            assert_eq!(f.drag_work(&frame, &v) > 0.0, positive);
         }
     }
 }

@@ -144,7 +144,8 @@ pub struct StepContext<'a> {
     pub obstacle_speed: Real,
     /// Elastic energy at the start of the step (from the assembly).
     pub u0: Real,
-    /// Work of the friction forces on the free nodes over the step (from the solve).
+    /// The work friction may do on the cloth over the step: a moving obstacle's drag
+    /// (`Friction::drag_work`).
     pub friction_work: Real,
 }
 
@@ -220,11 +221,14 @@ pub fn after_solve(c: &StepContext, v: Vec<Vec3>) -> Result<Solved, Fault> {
     let u1 = c.elastic.energy_at(&x1);
     let k1: Real = nodes.iter().zip(&v).map(|(n, v)| 0.5 * n.mass * v.norm_squared()).sum();
     let (ct, c1) = (contact_energy(c, &xt), contact_energy(c, &x1));
-    let work = wind_work(c, &x1, &v) + c.friction_work.max(0.0);
+    let work = wind_work(c, &x1, &v) + c.friction_work;
     let gain = dk + dp + (u1 - ut) + (c1 - ct);
     let mass: Real = nodes.iter().map(|n| n.mass).sum();
     let floor = mass * (g.norm() * FLOOR_DROP + 0.5 * FLOOR_SPEED * FLOOR_SPEED);
     let budget = work + ENERGY_TOLERANCE * (k0 + c.u0 + ct + work) + floor;
+    if std::env::var_os("VC_DBG").is_some() {
+        eprintln!("DBG after_solve dk={dk:.6} dp={dp:.6} du={:.6} dc={:.6} ct={ct:.6} c1={c1:.6} gain={gain:.6} budget={budget:.6}", u1 - ut, c1 - ct);
+    }
     if gain > budget || !gain.is_finite() {
         return Err(Fault::EnergyGain { gain, budget });
     }

@@ -18,7 +18,7 @@ use super::timers::Stage;
 use super::{SimError, Simulation};
 
 /// The implicit solve's result: end-of-step velocities (before handles are set exactly), the
-/// elastic energy at the start and the friction forces' work.
+/// elastic energy at the start and the work friction may do (`Friction::drag_work`).
 struct Implicit {
     v: Vec<Vec3>,
     u0: Real,
@@ -54,7 +54,7 @@ struct StepData {
     inv_mass: Vec<Real>,
     /// Elastic energy at the start (from the assembly).
     u0: Real,
-    /// Work of the friction forces on the free nodes over the step.
+    /// The work friction may do on the cloth over the step (a moving obstacle's drag).
     friction_work: Real,
     /// The contacts that stuck.
     stuck: Vec<[usize; 4]>,
@@ -126,6 +126,15 @@ impl Simulation {
             if capped && !accept_unresolved {
                 return Err(StepFault::Retry(Fault::Collisions));
             }
+        }
+        if std::env::var_os("VC_DBG").is_some() {
+            let ctx = self.context(&step);
+            let ue = ctx.elastic.energy_at(&x);
+            let ke: Real = self.state.mesh.nodes.iter().zip(&v).map(|(n, v)| 0.5 * n.mass * v.norm_squared()).sum();
+            let pe: Real = self.state.mesh.nodes.iter().zip(&x).map(|(n, x)| -n.mass * self.scene.gravity.dot(x)).sum();
+            let ps: Real = self.state.mesh.nodes.iter().zip(&solved.x).map(|(n, x)| -n.mass * self.scene.gravity.dot(x)).sum();
+            eprintln!("DBG E solved={:.6} end={:.6}", solved.kinetic + solved.elastic + ps, ke + ue + pe);
+            eprintln!("DBG t={:.4} h={:.5} u0={:.5} solved u={:.5} k={:.5} end u={:.5} k={:.5} fw={:.2e} stuck={} solves={}", t1, h, step.u0, solved.elastic, solved.kinetic, ue, ke, step.friction_work, step.stuck.len(), self.ws.counters.friction_resolves);
         }
         self.timed(Stage::FaultChecks, |s| checks::end_of_step(&s.context(&step), &solved, &x, &v))?;
         self.commit(x, v, t1, step.stuck);
@@ -237,7 +246,7 @@ impl Simulation {
             }
         };
         let clock = Instant::now();
-        let friction_work = friction.work(&frame, &v);
+        let friction_work = friction.drag_work(&frame, &v);
         let (stick, slide) = friction.counts();
         friction_s += clock.elapsed().as_secs_f64();
         let c = &mut self.ws.counters;
