@@ -226,9 +226,6 @@ pub fn after_solve(c: &StepContext, v: Vec<Vec3>) -> Result<Solved, Fault> {
     let mass: Real = nodes.iter().map(|n| n.mass).sum();
     let floor = mass * (g.norm() * FLOOR_DROP + 0.5 * FLOOR_SPEED * FLOOR_SPEED);
     let budget = work + ENERGY_TOLERANCE * (k0 + c.u0 + ct + work) + floor;
-    if std::env::var_os("VC_DBG").is_some() {
-        eprintln!("DBG after_solve dk={dk:.6} dp={dp:.6} du={:.6} dc={:.6} ct={ct:.6} c1={c1:.6} gain={gain:.6} budget={budget:.6}", u1 - ut, c1 - ct);
-    }
     if gain > budget || !gain.is_finite() {
         return Err(Fault::EnergyGain { gain, budget });
     }

@@ -127,15 +127,6 @@ impl Simulation {
                 return Err(StepFault::Retry(Fault::Collisions));
             }
         }
-        if std::env::var_os("VC_DBG").is_some() {
-            let ctx = self.context(&step);
-            let ue = ctx.elastic.energy_at(&x);
-            let ke: Real = self.state.mesh.nodes.iter().zip(&v).map(|(n, v)| 0.5 * n.mass * v.norm_squared()).sum();
-            let pe: Real = self.state.mesh.nodes.iter().zip(&x).map(|(n, x)| -n.mass * self.scene.gravity.dot(x)).sum();
-            let ps: Real = self.state.mesh.nodes.iter().zip(&solved.x).map(|(n, x)| -n.mass * self.scene.gravity.dot(x)).sum();
-            eprintln!("DBG E solved={:.6} end={:.6}", solved.kinetic + solved.elastic + ps, ke + ue + pe);
-            eprintln!("DBG t={:.4} h={:.5} u0={:.5} solved u={:.5} k={:.5} end u={:.5} k={:.5} fw={:.2e} stuck={} solves={}", t1, h, step.u0, solved.elastic, solved.kinetic, ue, ke, step.friction_work, step.stuck.len(), self.ws.counters.friction_resolves);
-        }
         self.timed(Stage::FaultChecks, |s| checks::end_of_step(&s.context(&step), &solved, &x, &v))?;
         self.commit(x, v, t1, step.stuck);
         Ok(())
