@@ -51,6 +51,8 @@ pub const MAX_REFACTORS: usize = 1;
 /// least one does); fewer wait for the next step. With thousands of contacts a handful change
 /// at every solve.
 pub const MIN_CHANGES: Real = 0.01;
+/// Further refactorisations per step that only release sticking contacts beyond the bound.
+pub const MAX_RELEASES: usize = 2;
 /// A sliding force that moved (in direction or size) by more than this fraction of its size is
 /// updated: Coulomb's law holds to 2% of the friction force (about 1° in direction).
 const SLIDE_TOLERANCE: Real = 0.02;
@@ -153,7 +155,7 @@ impl FrictionFrame<'_> {
         let p = match c.coupled && speed > 0.0 {
             true => {
                 let across = Mat3::identity() - c.n * c.n.transpose() - t * t.transpose();
-                (force / speed).min(self.stick_coefficient(c)) * across
+                (force / speed).min(c.m_eff / self.h) * across
             }
             false => Mat3::zeros(),
         };
@@ -180,6 +182,20 @@ pub struct FrictionTerm {
     pub rhs: [Vec3; 4],
     /// h c T for a sticking contact.
     pub damper: Option<Mat3>,
+}
+
+/// Which mode changes an update may apply (each applied change costs a refactorisation).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Budget {
+    /// Any: stick → slide and slide → stick.
+    All,
+    /// Only stick → slide: a sticking contact whose damper exceeds μ f_n applies a force beyond
+    /// Coulomb's bound for as long as it stays in the matrix, so releasing it is worth a
+    /// refactorisation; a slide that should stick still applies a force within the bound and
+    /// can wait for the next step.
+    Release,
+    /// None: changes wait for the next step.
+    None,
 }
 
 /// What a friction update changed.
@@ -272,7 +288,7 @@ impl Friction {
     /// the first update of a step (no hysteresis). Mode changes are applied only with `modes`
     /// and when at least `MIN_CHANGES` of the contacts want one; otherwise the matrix stays,
     /// they are counted in `pending` and become the next step's first guess (`stuck`).
-    pub fn update(&mut self, frame: &FrictionFrame, v: &[Vec3], first: bool, modes: bool) -> Change {
+    pub fn update(&mut self, frame: &FrictionFrame, v: &[Vec3], first: bool, modes: Budget) -> Change {
         let slack = if first { 0.0 } else { HYSTERESIS };
         // Coulomb's verdict per contact: its state at `v` and whether it should stick.
         let verdicts: Vec<(Real, Vec3, bool)> = self
@@ -298,14 +314,20 @@ impl Friction {
             })
             .collect();
         let wanted = self.contacts.iter().zip(&verdicts).filter(|(c, v)| (c.mode == Mode::Stick) != v.2).count();
-        let apply = modes && wanted > 0 && wanted as Real >= MIN_CHANGES * self.contacts.len() as Real;
-        self.pending = if apply { 0 } else { wanted };
-        let mut change = if apply { Change::Modes } else { Change::None };
+        let releases = self.contacts.iter().zip(&verdicts).filter(|(c, v)| c.mode == Mode::Stick && !v.2).count();
+        let enough = |k: usize| k > 0 && k as Real >= MIN_CHANGES * self.contacts.len() as Real;
+        let (apply, release) = match modes {
+            Budget::All => (enough(wanted) || releases > 0, false),
+            Budget::Release => (false, releases > 0),
+            Budget::None => (false, false),
+        };
+        self.pending = if apply { 0 } else if release { wanted - releases } else { wanted };
+        let mut change = if apply || release { Change::Modes } else { Change::None };
         for (c, &(bound, vt, stick)) in self.contacts.iter_mut().zip(&verdicts) {
             c.next_stick = stick;
             let speed = vt.norm();
             match c.mode {
-                Mode::Stick if !stick && apply => c.mode = Mode::Slide(frame.slide(c, vt, bound)),
+                Mode::Stick if !stick && (apply || release) => c.mode = Mode::Slide(frame.slide(c, vt, bound)),
                 Mode::Stick => {}
                 Mode::Slide(_) if stick && apply => c.mode = Mode::Stick,
                 Mode::Slide(s) => {
@@ -339,6 +361,34 @@ impl Friction {
                 frame.h * (-frame.force(c, v).dot(&o)).max(0.0)
             })
             .sum()
+    }
+
+    /// DEBUG (not for commit): per-step summary of obstacle and cloth friction.
+    pub fn debug_summary(&self, frame: &FrictionFrame, v: &[Vec3]) -> String {
+        let n = frame.x0.len();
+        let mut out = String::new();
+        for obstacle in [true, false] {
+            let (mut k, mut st, mut ft, mut bound, mut fy, mut viol, mut violf, mut fnsum) = (0, 0, 0.0, 0.0, 0.0, 0, 0.0, 0.0);
+            let (mut stale, mut pterm, mut stickx) = (0.0, 0.0, 0.0);
+            for c in &self.contacts {
+                if c.nodes.iter().any(|&i| i >= n) != obstacle { continue; }
+                k += 1;
+                let (fn1, _) = frame.kinematics(c, v);
+                let f = frame.force(c, v);
+                let b = c.mu * fn1;
+                if c.mode == Mode::Stick { st += 1; }
+                ft += f.norm(); bound += b; fnsum += fn1;
+                // force on cloth side: w_j f for cloth nodes
+                let wc: Real = (0..4).filter(|&j| c.nodes[j] < n).map(|j| c.w[j]).sum();
+                fy += wc * f.y;
+                if f.norm() > 1.1 * b { viol += 1; violf += f.norm() - b;
+                    if let Mode::Slide(sl) = c.mode { stale += (sl.force - b).max(0.0); let (_, vt) = frame.kinematics(c, v); pterm += (sl.p * (vt - sl.vt)).norm(); } else { stickx += f.norm() - b; }
+                }
+            }
+            out += &format!("{} k={} stick={} |ft|={:.3} muFn={:.3} Fn={:.3} Fy_cloth={:.3} viol={} excess={:.3} stale={:.3} pterm={:.3} stickx={:.3}; ",
+                if obstacle {"OBS"} else {"CLOTH"}, k, st, ft, bound, fnsum, fy, viol, violf, stale, pterm, stickx);
+        }
+        out
     }
 
     /// The sticking contacts' participants, sorted (the next step's first guess).
@@ -452,16 +502,16 @@ mod tests {
         };
         assert_eq!(f.contacts[0].mode, Mode::Stick);
         // c = 1e5: a residual slip of 1e-6 m/s needs 0.1 N ≤ μ f_n = 0.5 (f_n at x₀ + h v).
-        assert_eq!(f.update(&frame, &[Vec3::new(1e-6, 0.0, 0.0)], true, true), Change::None);
+        assert_eq!(f.update(&frame, &[Vec3::new(1e-6, 0.0, 0.0)], true, Budget::All), Change::None);
         // 1e-5 m/s needs 1 N > 0.5: slides along +x with 0.5 N.
-        assert_eq!(f.update(&frame, &[Vec3::new(1e-5, 0.0, 0.0)], true, true), Change::Modes);
+        assert_eq!(f.update(&frame, &[Vec3::new(1e-5, 0.0, 0.0)], true, Budget::All), Change::Modes);
         assert!(matches!(f.contacts[0].mode, Mode::Slide(s) if s.t == Vec3::x() && s.force == 0.5));
         // Same direction and force: converged.
-        assert_eq!(f.update(&frame, &[Vec3::new(2e-5, 0.0, 0.0)], true, true), Change::None);
+        assert_eq!(f.update(&frame, &[Vec3::new(2e-5, 0.0, 0.0)], true, Budget::All), Change::None);
         // Turned: the force follows (right-hand side only).
-        assert_eq!(f.update(&frame, &[Vec3::new(2e-5, 2e-5, 0.0)], true, true), Change::Rhs);
+        assert_eq!(f.update(&frame, &[Vec3::new(2e-5, 2e-5, 0.0)], true, Budget::All), Change::Rhs);
         // Reversed against the force: sticks.
-        assert_eq!(f.update(&frame, &[Vec3::new(-1e-5, -1e-5, 0.0)], true, true), Change::Modes);
+        assert_eq!(f.update(&frame, &[Vec3::new(-1e-5, -1e-5, 0.0)], true, Budget::All), Change::Modes);
         assert_eq!(f.contacts[0].mode, Mode::Stick);
     }
 

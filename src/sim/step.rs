@@ -6,7 +6,7 @@
 
 use std::time::Instant;
 
-use crate::collision::friction::{self, Change, Friction, FrictionContact, FrictionFrame};
+use crate::collision::friction::{self, Budget, Change, Friction, FrictionContact, FrictionFrame};
 use crate::collision::proximity::Contact;
 use crate::math::{Real, Vec3};
 use crate::scene::RemeshMode;
@@ -224,7 +224,11 @@ impl Simulation {
                 break v;
             }
             let clock = Instant::now();
-            let modes = timing.factorisations <= friction::MAX_REFACTORS;
+            let modes = match timing.factorisations {
+                f if f <= friction::MAX_REFACTORS => Budget::All,
+                f if f <= friction::MAX_REFACTORS + friction::MAX_RELEASES => Budget::Release,
+                _ => Budget::None,
+            };
             let change = friction.update(&frame, &v, timing.solves == 1, modes);
             friction_s += clock.elapsed().as_secs_f64();
             match change {
@@ -236,6 +240,9 @@ impl Simulation {
                 Change::Modes => refactor = true,
             }
         };
+        if std::env::var_os("VIEWCLOTH_DEBUG_FRICTION").is_some() && !friction.is_empty() {
+            eprintln!("FRIC t={:.4} solves={} facts={} conv={} pending={} {}", self.state.time, timing.solves, timing.factorisations, converged, friction.pending, friction.debug_summary(&frame, &v));
+        }
         let clock = Instant::now();
         let friction_work = friction.drag_work(&frame, &v);
         let (stick, slide) = friction.counts();
