@@ -120,7 +120,7 @@ pub struct FrictionFrame<'a> {
 
 impl FrictionFrame<'_> {
     /// Position and velocity of participant `i` with cloth velocities `v`.
-    fn point(&self, i: usize, v: &[Vec3]) -> (Vec3, Vec3) {
+    pub(crate) fn point(&self, i: usize, v: &[Vec3]) -> (Vec3, Vec3) {
         let n = self.x0.len();
         if i < n {
             (self.x0[i] + self.h * v[i], v[i])
@@ -198,8 +198,8 @@ pub enum Budget {
     None,
 }
 
-/// What a friction update changed.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+/// What a friction update changed (ordered: a matrix change includes a right-hand side change).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Change {
     /// Every contact agrees with its mode: done.
     None,

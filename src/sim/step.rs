@@ -7,6 +7,7 @@
 use std::time::Instant;
 
 use crate::collision::friction::{self, Budget, Change, Friction, FrictionContact, FrictionFrame};
+use crate::collision::speculative::Speculative;
 use crate::collision::proximity::Contact;
 use crate::math::{Real, Vec3};
 use crate::scene::RemeshMode;
@@ -149,7 +150,7 @@ impl Simulation {
     fn proximity(&mut self, t1: Real) -> Vec<Contact> {
         let Some(world) = &mut self.ws.collisions else { return Vec::new() };
         world.advance(self.state.time, t1);
-        let contacts = world.proximity(&self.state.mesh, &self.ws.node_area);
+        let contacts = world.proximity(&self.state.mesh, &self.ws.node_area, t1 - self.state.time);
         self.ws.counters.contacts += contacts.len();
         contacts
     }
@@ -191,6 +192,7 @@ impl Simulation {
             }
             _ => Friction { contacts: Vec::new(), pending: 0 },
         };
+        let mut speculative = Speculative::new(contacts, &frame);
         let mut friction_s = clock.elapsed().as_secs_f64();
         let input = StepInput {
             mesh: &self.state.mesh,
@@ -213,10 +215,12 @@ impl Simulation {
         timing.assemble_s += clock.elapsed().as_secs_f64();
         let (mut refactor, mut converged) = (true, true);
         let v = loop {
-            let terms = friction.terms(&frame);
-            let dv = self.ws.system.solve(&input, &terms, refactor, &mut timing).map_err(fatal)?;
+            let mut terms = friction.terms(&frame);
+            terms.extend(speculative.terms(&frame));
+            let again = !friction.is_empty() || !speculative.is_empty();
+            let dv = self.ws.system.solve(&input, &terms, refactor, again, &mut timing).map_err(fatal)?;
             let v: Vec<Vec3> = v0.iter().zip(&dv).map(|(v, dv)| v + dv).collect();
-            if friction.is_empty() {
+            if friction.is_empty() && speculative.is_empty() {
                 break v;
             }
             if timing.solves == friction::MAX_SOLVES {
@@ -229,11 +233,17 @@ impl Simulation {
                 f if f <= friction::MAX_REFACTORS + friction::MAX_RELEASES => Budget::Release,
                 _ => Budget::None,
             };
-            let change = friction.update(&frame, &v, timing.solves == 1, modes);
+            // Contacts that switch on or off change what the step is (a pull or an unseen
+            // penetration), like an overloaded stick: worth a refactorisation in either budget.
+            let contacts_change = speculative.update(&frame, &v, modes != Budget::None);
+            let change = match friction.is_empty() {
+                true => Change::None,
+                false => friction.update(&frame, &v, timing.solves == 1, modes),
+            };
             friction_s += clock.elapsed().as_secs_f64();
-            match change {
+            match change.max(contacts_change) {
                 Change::None => {
-                    converged = friction.pending == 0;
+                    converged = friction.pending == 0 && speculative.pending == 0;
                     break v;
                 }
                 Change::Rhs => refactor = false,

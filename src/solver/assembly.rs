@@ -111,20 +111,23 @@ impl ImplicitSystem {
         energy
     }
 
-    /// Solves the assembled system with the friction `terms` added; returns Δv. With `refactor`
-    /// false the matrix must be the one last factorised (only the right-hand side changed).
+    /// Solves the assembled system with the friction and contact `terms` added; returns Δv.
+    /// With `refactor` false the matrix must be the one last factorised (only the right-hand
+    /// side changed). `again`: the step may solve again with other terms (the assembled system
+    /// is then kept).
     pub fn solve(
         &mut self,
         inp: &StepInput,
         terms: &[FrictionTerm],
         refactor: bool,
+        again: bool,
         timing: &mut SolveTiming,
     ) -> Result<Vec<Vec3>, SolveError> {
         let t0 = std::time::Instant::now();
         if self.base_saved {
             self.blocks.copy_from_slice(&self.base_blocks);
             self.rhs.copy_from_slice(&self.base_rhs);
-        } else if !terms.is_empty() {
+        } else if again {
             // Kept for the re-solves of this step.
             self.base_blocks.clone_from(&self.blocks);
             self.base_rhs.clone_from(&self.rhs);
