@@ -115,13 +115,8 @@ mod tests {
 
     /// Node 0 (mass 1) above a fixed point (index 1), normal +z, thickness 2 mm, k = 1000.
     fn setup(height: Real, v: Real) -> ([Vec3; 1], [Vec3; 1], Contact) {
-        let c = Contact {
-            nodes: [0, 1, 0, 0],
-            w: [1.0, -1.0, 0.0, 0.0],
-            n: Vec3::z(),
-            thickness: 2e-3,
-            stiffness: 1000.0,
-        };
+        let c =
+            Contact { nodes: [0, 1, 0, 0], w: [1.0, -1.0, 0.0, 0.0], n: Vec3::z(), thickness: 2e-3, stiffness: 1000.0 };
         ([Vec3::new(0.0, 0.0, height)], [Vec3::new(0.0, 0.0, v)], c)
     }
 

@@ -7,8 +7,8 @@
 use std::time::Instant;
 
 use crate::collision::friction::{self, Budget, Change, Friction, FrictionContact, FrictionFrame};
-use crate::collision::speculative::Speculative;
 use crate::collision::proximity::Contact;
+use crate::collision::speculative::Speculative;
 use crate::math::{Real, Vec3};
 use crate::scene::RemeshMode;
 use crate::solver::{SolveError, SolveTiming, StepInput};
@@ -250,9 +250,6 @@ impl Simulation {
                 Change::Modes => refactor = true,
             }
         };
-        if std::env::var_os("VIEWCLOTH_DEBUG_FRICTION").is_some() && !friction.is_empty() {
-            eprintln!("FRIC t={:.4} solves={} facts={} conv={} pending={} {}", self.state.time, timing.solves, timing.factorisations, converged, friction.pending, friction.debug_summary(&frame, &v));
-        }
         let clock = Instant::now();
         let friction_work = friction.drag_work(&frame, &v);
         let (stick, slide) = friction.counts();
