@@ -347,10 +347,14 @@ impl Friction {
                 Mode::Slide(_) if stick && apply => c.mode = Mode::Stick,
                 Mode::Slide(s) => {
                     // The force follows when it moved by more than the tolerance of its size.
+                    // It is at most what stops the relative motion within the step (ARCSim's
+                    // cap, m_eff |v_t| / h): more would reverse it, and between re-solves with
+                    // one factor a force that grows with the depth it drives diverges.
                     let t1 = if speed > 0.0 && c.coupled { vt / speed } else { s.t };
-                    let delta = (bound * t1 - s.force * s.t).norm();
-                    if delta > SLIDE_TOLERANCE * bound.max(s.force) {
-                        c.mode = Mode::Slide(Slide { t: t1, force: bound, vt, p: s.p });
+                    let force = bound.min(c.m_eff * speed / frame.h);
+                    let delta = (force * t1 - s.force * s.t).norm();
+                    if delta > SLIDE_TOLERANCE * force.max(s.force) {
+                        c.mode = Mode::Slide(Slide { t: t1, force, vt, p: s.p });
                         if change == Change::None {
                             change = Change::Rhs;
                         }
