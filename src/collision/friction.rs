@@ -350,8 +350,14 @@ impl Friction {
                     // It is at most what stops the relative motion within the step (ARCSim's
                     // cap, m_eff |v_t| / h): more would reverse it, and between re-solves with
                     // one factor a force that grows with the depth it drives diverges.
+                    // "The relative motion" is the one friction meets: the solved velocity with
+                    // this force's own effect in the step, −f t̂ h / m_eff, taken back. Capping at
+                    // the solved speed alone would cap a loaded contact at its load (a sheet on
+                    // an incline then slides at one step's load, g_t h, for ever, its friction
+                    // exactly balancing gravity instead of decelerating it to a stop).
                     let t1 = if speed > 0.0 && c.coupled { vt / speed } else { s.t };
-                    let force = bound.min(c.m_eff * speed / frame.h);
+                    let met = (vt + s.t * (s.force * frame.h / c.m_eff)).norm();
+                    let force = bound.min(c.m_eff * met / frame.h);
                     let delta = (force * t1 - s.force * s.t).norm();
                     if delta > SLIDE_TOLERANCE * force.max(s.force) {
                         c.mode = Mode::Slide(Slide { t: t1, force, vt, p: s.p });
