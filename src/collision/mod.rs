@@ -15,4 +15,5 @@ pub mod params;
 pub mod proximity;
 pub mod sdf;
 pub mod shape;
+pub mod speculative;
 pub mod world;

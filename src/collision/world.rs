@@ -34,6 +34,15 @@ pub struct CollisionCounters {
     pub cap_hits: usize,
     /// Zones whose projection had no solution.
     pub failed_zones: usize,
+    /// Friction contacts sticking and sliding at the accepted solves.
+    pub sticking: usize,
+    pub sliding: usize,
+    /// Solves and factorisations beyond the first that friction's mode changes took.
+    pub friction_resolves: usize,
+    pub friction_refactors: usize,
+    /// Steps ending with friction contacts not in the mode Coulomb's law gives them
+    /// (`friction::MAX_REFACTORS`, `friction::MAX_SOLVES`).
+    pub friction_unconverged: usize,
 }
 
 pub struct CollisionWorld {
@@ -49,6 +58,8 @@ pub struct CollisionWorld {
     /// Outward unit normals of the obstacle vertices at `obs_x1`.
     obs_normals: Vec<Vec3>,
     obs_edges: Vec<[usize; 2]>,
+    /// Per obstacle edge (same order as `obs_edges`), the third vertex of each adjacent triangle.
+    obs_edge_opposite: Vec<Vec<usize>>,
     broad: BroadPhase,
     /// Per body, its signed distance field as of the last query (`with_sdf`); empty until then.
     sdfs: Vec<Mutex<Option<BodySdf>>>,
@@ -75,6 +86,15 @@ impl CollisionWorld {
             .collect();
         obs_edges.sort_unstable();
         obs_edges.dedup();
+        let mut obs_edge_opposite = vec![Vec::new(); obs_edges.len()];
+        for t in &obs_tris {
+            for k in 0..3 {
+                let e = [t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3])];
+                if let Ok(i) = obs_edges.binary_search(&e) {
+                    obs_edge_opposite[i].push(t[(k + 2) % 3]);
+                }
+            }
+        }
         let mut w = CollisionWorld {
             params,
             bodies,
@@ -84,6 +104,7 @@ impl CollisionWorld {
             obs_x1: Vec::new(),
             obs_normals: Vec::new(),
             obs_edges,
+            obs_edge_opposite,
             broad: BroadPhase::default(),
             sdfs: Vec::new(),
         };
@@ -149,12 +170,24 @@ impl CollisionWorld {
     /// travel over the step beyond the thickness. ARCSim searches a fixed 2 × thickness
     /// (`proximity.cpp`, `dmin`); without this the implicit solve carries hundreds of nodes into
     /// the obstacle and leaves them all to the impact zones.
-    pub fn proximity(&mut self, mesh: &Mesh, contact_area: &[Real]) -> Vec<Contact> {
+    ///
+    /// Likewise cloth that moves faster than the thickness per step (a light fabric falling
+    /// onto a ball at 2 m/s moves 5 mm in a step of 1/400 s, past a 4 mm thickness) would reach
+    /// deep inside the thickness unseen, and the next step's penalty would release ½ k g² that no
+    /// work paid for. So a pair that would come within the thickness during the step at its start
+    /// velocities (the search reaches h times the fastest node of each side beyond it) is a
+    /// contact too, *speculative* while its gap at the start is positive: the step's active set
+    /// (`collision::speculative`) switches it on only where the solved motion crosses the
+    /// thickness.
+    pub fn proximity(&mut self, mesh: &Mesh, contact_area: &[Real], h: Real) -> Vec<Contact> {
         let th = self.params.thickness;
         let n = mesh.nodes.len();
         let x: Vec<Vec3> = mesh.positions();
-        // Obstacle boxes span the step, so cloth the obstacle sweeps over is a candidate.
-        let iv = Interval { cloth0: &x, cloth1: &x, obs0: &self.obs_x0, obs1: &self.obs_x1 };
+        let xh: Vec<Vec3> = mesh.nodes.iter().map(|node| node.x + h * node.v).collect();
+        let speed: Vec<Real> = mesh.nodes.iter().map(|node| node.v.norm()).collect();
+        // Obstacle boxes span the step, so cloth the obstacle sweeps over is a candidate; cloth
+        // boxes span the motion at the start velocities.
+        let iv = Interval { cloth0: &x, cloth1: &xh, obs0: &self.obs_x0, obs1: &self.obs_x1 };
         let pos = |i: usize| if i < n { x[i] } else { self.obs_x1[i - n] };
         let travel: Vec<Real> = self.obs_x0.iter().zip(&self.obs_x1).map(|(a, b)| (b - a).norm()).collect();
         let outward = &self.obs_normals;
@@ -169,13 +202,32 @@ impl CollisionWorld {
             let obstacle = || nodes.iter().filter(|&&i| i >= n).map(|&i| i - n);
             let reach = th + obstacle().map(|i| travel[i]).fold(0.0, Real::max);
             let out: Vec3 = obstacle().map(|i| outward[i]).sum();
-            match kind {
-                VF if nodes[0] < n && nodes[1] >= n => this.obstacle_face_contact(nodes, &xs, k, reach),
-                VF if nodes[0] >= n => obstacle_vertex_contact(nodes, &xs, th, k, reach, &out),
-                VF => node_face_contact(nodes, &xs, th, k),
-                _ if nodes[2] >= n => obstacle_edge_contact(nodes, &xs, th, k, reach, &out),
-                _ => edge_edge_contact(nodes, &xs, th, k),
-            }
+            // Within the thickness plus what the pair can close in the step at its start
+            // velocities (each side at most h times its fastest node).
+            let fastest = |ids: &[usize]| ids.iter().filter(|&&i| i < n).map(|&i| speed[i]).fold(0.0, Real::max);
+            let split = if kind == VF { 1 } else { 2 };
+            let detect = th + h * (fastest(&nodes[..split]) + fastest(&nodes[split..]));
+            let found = match kind {
+                VF if nodes[0] < n && nodes[1] >= n => this.obstacle_face_contact(nodes, &xs, k, reach, detect),
+                VF if nodes[0] >= n => obstacle_vertex_contact(nodes, &xs, detect, k, reach.max(detect), &out),
+                VF => node_face_contact(nodes, &xs, detect, k),
+                _ if nodes[2] >= n => {
+                    let e = [(nodes[2] - n).min(nodes[3] - n), (nodes[2] - n).max(nodes[3] - n)];
+                    let opposite: Vec<Vec3> = this
+                        .obs_edges
+                        .binary_search(&e)
+                        .map(|i| this.obs_edge_opposite[i].iter().map(|&o| this.obs_x1[o]).collect())
+                        .unwrap_or_default();
+                    obstacle_edge_contact(nodes, &xs, detect, k, reach.max(detect), &out, &opposite)
+                }
+                _ => edge_edge_contact(nodes, &xs, detect, k),
+            };
+            // A contact within the thickness now, or one the start velocities carry within it
+            // by the end of the step (speculative).
+            found.map(|c| Contact { thickness: th, ..c }).filter(|c| {
+                let ph = |i: usize| if i < n { xh[i] } else { this.obs_x1[i - n] };
+                c.gap(&nodes.map(pos)) < 0.0 || c.gap(&nodes.map(ph)) < 0.0
+            })
         };
         let found = broad.search(mesh, &self.obs_tris, &self.obs_edges, &iv, th, self.params.self_collision, narrow);
         self.broad = broad;
@@ -196,6 +248,39 @@ impl CollisionWorld {
             }
             same
         });
+        // Likewise one contact per cloth edge and obstacle body against obstacle edges, and one
+        // per cloth face and body against obstacle vertices: the nearest (ARCSim's
+        // `proximity_constraints` keeps the nearest per element and side). Several frozen
+        // planes with slightly different normals at one place make a corner that the cloth
+        // cannot slide out of: on ARCSim's sphere.json the sheet stayed on the moving sphere
+        // 8 frames longer and stretched 40%, with obstacle friction off.
+        let key = |c: &Contact| -> Option<(u8, [usize; 3], usize)> {
+            let body_of = |i: usize| self.body_start.partition_point(|&s| s <= i - n);
+            if c.nodes[0] >= n {
+                Some((0, [c.nodes[1], c.nodes[2], c.nodes[3]], body_of(c.nodes[0])))
+            } else if c.w[0] != 1.0 && c.nodes[2] >= n {
+                Some((1, [c.nodes[0], c.nodes[1], 0], body_of(c.nodes[2])))
+            } else {
+                None
+            }
+        };
+        let dist = |c: &Contact| (c.gap(&c.nodes.map(pos)) + c.thickness).abs();
+        let mut nearest: std::collections::HashMap<(u8, [usize; 3], usize), usize> = std::collections::HashMap::new();
+        for (i, c) in contacts.iter().enumerate() {
+            if let Some(k) = key(c) {
+                let e = nearest.entry(k).or_insert(i);
+                if dist(c) < dist(&contacts[*e]) {
+                    *e = i;
+                }
+            }
+        }
+        let keep: Vec<bool> =
+            contacts.iter().enumerate().map(|(i, c)| key(c).is_none_or(|k| nearest[&k] == i)).collect();
+        let mut i = 0;
+        contacts.retain(|_| {
+            i += 1;
+            keep[i - 1]
+        });
         contacts
     }
 
@@ -215,16 +300,24 @@ impl CollisionWorld {
 
     /// Cloth node against an obstacle face: the obstacle's outward normal decides the side, so a
     /// node that is slightly inside is pushed out, not further in. In front of the face a node
-    /// counts within the thickness; behind it, within `reach` (thickness plus the obstacle's
+    /// counts within `detect` (the thickness plus what the pair closes in the step at its start
+    /// velocities); behind it, within `reach` (thickness plus the obstacle's
     /// travel over the step), and only over the face's interior: a long face's bounding box
     /// reaches far, and a node in front of a slender obstacle (a leg) is also "behind" the faces
     /// on its far side.
-    fn obstacle_face_contact(&self, nodes: [usize; 4], x: &[Vec3; 4], k: Real, reach: Real) -> Option<Contact> {
+    fn obstacle_face_contact(
+        &self,
+        nodes: [usize; 4],
+        x: &[Vec3; 4],
+        k: Real,
+        reach: Real,
+        detect: Real,
+    ) -> Option<Contact> {
         let th = self.params.thickness;
         let cl = closest_point_triangle(&x[0], &x[1], &x[2], &x[3]);
         let outward = (x[2] - x[1]).cross(&(x[3] - x[1])).try_normalize(0.0)?;
         let side = (x[0] - cl.point).dot(&outward);
-        if cl.dist >= reach || (side >= 0.0 && cl.dist >= th) {
+        if cl.dist >= if side >= 0.0 { detect } else { reach } {
             return None;
         }
         // Behind the face but beside it: another face of the obstacle is nearer. (Behind an

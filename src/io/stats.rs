@@ -99,6 +99,21 @@ pub struct CollisionFrameStats {
     pub failed_zones: usize,
     /// Cloth nodes deeper than thickness/2 inside an obstacle at the frame end (must be 0).
     pub penetrations: usize,
+    /// Friction contacts sticking and sliding at the accepted solves (summed over the steps).
+    #[serde(default)]
+    pub sticking: usize,
+    #[serde(default)]
+    pub sliding: usize,
+    /// Solves and factorisations beyond one per step that friction's mode changes took.
+    #[serde(default)]
+    pub friction_resolves: usize,
+    #[serde(default)]
+    pub friction_refactors: usize,
+    /// Steps ending with friction contacts not in the mode Coulomb's law gives them (mode changes
+    /// beyond the refactorisation limit wait for the next step; sliding forces beyond the solve
+    /// limit keep their last value).
+    #[serde(default)]
+    pub friction_unconverged: usize,
 }
 
 #[derive(Serialize, Deserialize, Debug, Clone, Default)]

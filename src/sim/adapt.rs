@@ -149,6 +149,7 @@ impl Simulation {
             false => vec![0.0; state.mesh.edges.len()],
         };
         state.extra_pairs.clear();
+        state.stuck.clear();
         self.ws.remeshed(state)?;
         self.constraints_remeshed();
         self.push_out(None)?;

@@ -22,7 +22,7 @@ use crate::scene::{RemeshMode, Scene};
 use super::SimState;
 
 const MAGIC: &[u8; 8] = b"VCLOTHCK";
-const FORMAT_VERSION: u32 = 3;
+const FORMAT_VERSION: u32 = 4;
 /// File names: `checkpoint_<frame>.bin`.
 const PREFIX: &str = "checkpoint_";
 const SUFFIX: &str = ".bin";
@@ -195,6 +195,8 @@ pub fn encode(run: &RunRecord, st: &SimState, stats: &RunStats) -> Vec<u8> {
         w.usize(i);
         w.usize(j);
     }
+    w.usize(st.stuck.len());
+    st.stuck.iter().flatten().for_each(|&i| w.usize(i));
     // Statistics so far (serialising a RunStats cannot fail: strings, numbers, maps).
     w.bytes(&serde_json::to_vec(stats).unwrap_or_default());
     let sum = fnv1a(&w.0);
@@ -290,11 +292,14 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
     }
     let np = r.count(16)?;
     let extra_pairs = (0..np).map(|_| Ok((r.usize()?, r.usize()?))).collect::<Result<Vec<_>, String>>()?;
+    let ns = r.count(32)?;
+    let stuck =
+        (0..ns).map(|_| Ok([r.usize()?, r.usize()?, r.usize()?, r.usize()?])).collect::<Result<Vec<_>, String>>()?;
     let stats: RunStats = serde_json::from_slice(r.bytes()?).map_err(|e| format!("statistics: {e}"))?;
     if r.pos != body.len() {
         return Err("trailing bytes".into());
     }
-    let state = SimState { frame, steps, time, pushed_out, mesh, rest_angles, handle_nodes, extra_pairs };
+    let state = SimState { frame, steps, time, pushed_out, mesh, rest_angles, handle_nodes, extra_pairs, stuck };
     Ok(Checkpoint { run, state, stats })
 }
 
@@ -385,6 +390,7 @@ mod tests {
             rest_angles: vec![0.0; 16],
             handle_nodes: vec![vec![0, 2]],
             extra_pairs: vec![(3, 1)],
+            stuck: vec![[0, 1, 2, 9]],
         };
         let run = RunRecord {
             scene_file: Some("/a/b.json".into()),
@@ -404,6 +410,7 @@ mod tests {
         assert_eq!(back.state.time.to_bits(), st.time.to_bits());
         assert_eq!(back.state.mesh.nodes.len(), st.mesh.nodes.len());
         assert_eq!(back.state.extra_pairs, st.extra_pairs);
+        assert_eq!(back.state.stuck, st.stuck);
         for cut in [0, 8, 20, bytes.len() / 2, bytes.len() - 1] {
             assert!(decode(&bytes[..cut]).is_err(), "truncated at {cut} accepted");
         }

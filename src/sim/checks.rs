@@ -1,28 +1,29 @@
 //! The fault checks of a step: pure functions of the state before the step, the solved state
-//! and the state after friction and collisions. A check that fails returns the `Fault`; the
+//! and the state after collisions. A check that fails returns the `Fault`; the
 //! step (`recover.rs`) rolls the attempt back and retries it in halves.
 //!
 //! The checks, and why each is a fault rather than physics:
 //!
 //! - **Factorisation** (in the solve): the system matrix M + (hα + h²)K − hD is SPD by
 //!   construction (projected Hessians); a failed Cholesky means non-finite or absurd entries.
-//! - **Energy** (after the implicit solve, before friction and collisions): handles and
-//!   obstacles are moved to their end-of-step positions first, which is where all their work is
-//!   done (their contact penalties are frozen at those positions); the free nodes' motion is then
-//!   one backward-Euler step, which dissipates. So the energy change of the free motion,
+//! - **Energy** (after the implicit solve, before collisions): handles and obstacles are moved
+//!   to their end-of-step positions first, which is where all their work is done (their contact
+//!   penalties are frozen at those positions); the free nodes' motion is then one backward-Euler
+//!   step, which dissipates. So the energy change of the free motion,
 //!   ΔE = ΔK_free + ΔP_free + U(x̂) − U(x̃) + C(x̂) − C(x̃)
 //!   (x̃: start positions with handles on their targets, x̂: solved positions, U elastic, C
-//!   repulsion, P gravity), may exceed the wind's work W only by
+//!   repulsion, P gravity), may exceed the work W of the wind and of friction (positive where a
+//!   moving obstacle drags the cloth; `Friction::work`) only by
 //!   `ENERGY_TOLERANCE` × (K₀ + U₀ + C(x̃) + W) + a floor of the cloth's mass dropping
 //!   `FLOOR_DROP` and moving at `FLOOR_SPEED`. One linearised Newton step that misses the
 //!   stretch of a large rotation (drape_stiff at h = 1/24: 1.5 J → 120 J in one step with fixed
 //!   handles) fails this by orders of magnitude.
 //! - **Non-finite** positions or velocities at the end of the step.
-//! - **Speed** (after friction and collisions): no node faster than 2 (v̂_max + v_obstacle,max)
+//! - **Speed** (after collisions): no node faster than 2 (v̂_max + v_obstacle,max)
 //!   + `KICK_THICKNESSES`·thickness/h + 1 m/s, v̂ the solved velocities: an impact-zone
 //!   projection may carry nodes along with an obstacle and push them out by a few thicknesses,
 //!   not fling them.
-//! - **Energy of the collision stages**: friction and impact zones may add at most, per node
+//! - **Energy of the collision stage**: impact zones may add at most, per node
 //!   they touch, the kinetic energy of moving at twice the fastest obstacle's speed plus that
 //!   of the push-out above (both scale like the energy they allow, so a smaller step does not
 //!   turn a push-out into a fault), with the same tolerance as the solve.
@@ -143,6 +144,9 @@ pub struct StepContext<'a> {
     pub obstacle_speed: Real,
     /// Elastic energy at the start of the step (from the assembly).
     pub u0: Real,
+    /// The work friction may do on the cloth over the step: a moving obstacle's drag
+    /// (`Friction::drag_work`).
+    pub friction_work: Real,
 }
 
 /// The solved (pre-collision) state and its energy, for the end-of-step check.
@@ -217,18 +221,18 @@ pub fn after_solve(c: &StepContext, v: Vec<Vec3>) -> Result<Solved, Fault> {
     let u1 = c.elastic.energy_at(&x1);
     let k1: Real = nodes.iter().zip(&v).map(|(n, v)| 0.5 * n.mass * v.norm_squared()).sum();
     let (ct, c1) = (contact_energy(c, &xt), contact_energy(c, &x1));
-    let wind = wind_work(c, &x1, &v);
+    let work = wind_work(c, &x1, &v) + c.friction_work;
     let gain = dk + dp + (u1 - ut) + (c1 - ct);
     let mass: Real = nodes.iter().map(|n| n.mass).sum();
     let floor = mass * (g.norm() * FLOOR_DROP + 0.5 * FLOOR_SPEED * FLOOR_SPEED);
-    let budget = wind + ENERGY_TOLERANCE * (k0 + c.u0 + ct + wind) + floor;
+    let budget = work + ENERGY_TOLERANCE * (k0 + c.u0 + ct + work) + floor;
     if gain > budget || !gain.is_finite() {
         return Err(Fault::EnergyGain { gain, budget });
     }
     Ok(Solved { x: x1, v, kinetic: k1, elastic: u1, floor })
 }
 
-/// Checks on the end-of-step state `x`, `v` (after friction and collisions): finite, speed cap,
+/// Checks on the end-of-step state `x`, `v` (after collisions): finite, speed cap,
 /// energy against the solved state, strain jump.
 pub fn end_of_step(c: &StepContext, solved: &Solved, x: &[Vec3], v: &[Vec3]) -> Result<(), Fault> {
     if !all_finite(x, v) {
@@ -242,10 +246,10 @@ pub fn end_of_step(c: &StepContext, solved: &Solved, x: &[Vec3], v: &[Vec3]) -> 
         return Err(Fault::Speed { max, cap });
     }
     if v == solved.v.as_slice() {
-        // Friction and collisions changed nothing: the solve's check stands.
+        // Collisions changed nothing: the solve's check stands.
         return Ok(());
     }
-    // Friction and impact zones are inelastic: they create no energy beyond carrying the nodes
+    // Impact zones are inelastic: they create no energy beyond carrying the nodes
     // they touch along with a moving obstacle (at up to twice its speed) and the kick of
     // pushing a node out by up to `KICK_THICKNESSES` thicknesses within the step. Both
     // allowances scale like the kinetic energy they cover, so halving h does not turn a

@@ -217,6 +217,11 @@ impl Output<'_> {
                 ccd_cap_hits: c.cap_hits,
                 failed_zones: c.failed_zones,
                 penetrations: sim.penetrations(),
+                sticking: c.sticking,
+                sliding: c.sliding,
+                friction_resolves: c.friction_resolves,
+                friction_refactors: c.friction_refactors,
+                friction_unconverged: c.friction_unconverged,
             });
             sim.ws.timers.since(Stage::PenetrationCheck, clock);
         }

@@ -32,6 +32,9 @@ pub struct SimState {
     /// Cloth–cloth node pairs (i > j) added to the system's sparsity pattern for self contacts
     /// (they change the fill-reducing ordering, hence the rounding of the solve).
     pub extra_pairs: Vec<(usize, usize)>,
+    /// Participants of the friction contacts that stuck at the last step, sorted: the next
+    /// step's first guess of their mode (`collision::friction`).
+    pub stuck: Vec<[usize; 4]>,
 }
 
 impl SimState {
@@ -49,6 +52,7 @@ impl SimState {
             rest_angles,
             mesh,
             extra_pairs: Vec::new(),
+            stuck: Vec::new(),
         }
     }
 
@@ -77,6 +81,10 @@ impl SimState {
         }
         if self.extra_pairs.iter().any(|&(i, j)| i >= n || j >= i) {
             return Err(bad("contact pattern pair out of range".into()));
+        }
+        // Only looked up (a first guess), but looked up by binary search.
+        if !self.stuck.is_sorted() {
+            return Err(bad("friction contacts not sorted".into()));
         }
         Ok(self)
     }

@@ -1,21 +1,46 @@
 //! One time step as a list of named, timed stages (DESIGN.md "Pipeline of one time step", after
 //! ARCSim's `advance_step`): handles → proximity → assembly / factorisation / solve →
-//! integration → friction → collision, with the fault checks of `checks.rs` after the solve and
-//! at the end. A stage the scene does not need does not run. An attempt whose result fails a
+//! integration → collision, with Coulomb friction inside the solve (`collision::friction`) and the
+//! fault checks of `checks.rs` after the solve and at the end. A stage the scene does not need does not run. An attempt whose result fails a
 //! check is not committed; `Simulation::step` (`recover.rs`) retries it in halves.
 
 use std::time::Instant;
 
-use crate::collision::friction::{apply_friction, FrictionContact, FrictionState};
+use crate::collision::friction::{self, Budget, Change, Friction, FrictionContact, FrictionFrame};
 use crate::collision::proximity::Contact;
+use crate::collision::speculative::Speculative;
 use crate::math::{Real, Vec3};
 use crate::scene::RemeshMode;
-use crate::solver::{SolveError, StepInput, StepOutput};
+use crate::solver::{SolveError, SolveTiming, StepInput};
 
 use super::checks::{self, Elastic, StepContext};
 use super::recover::{Fault, StepFault};
 use super::timers::Stage;
 use super::{SimError, Simulation};
+
+/// The implicit solve's result: end-of-step velocities (before handles are set exactly), the
+/// elastic energy at the start and the work friction may do (`Friction::drag_work`).
+struct Implicit {
+    v: Vec<Vec3>,
+    u0: Real,
+    friction_work: Real,
+    /// The contacts sticking at the solve (`SimState::stuck` once the step is taken).
+    stuck: Vec<[usize; 4]>,
+}
+
+/// The step's repulsion contacts as friction contacts, with the cloth–obstacle or cloth–cloth
+/// coefficient.
+fn friction_contacts<'a>(
+    contacts: &'a [Contact],
+    n: usize,
+    world: &'a crate::collision::world::CollisionWorld,
+) -> impl Iterator<Item = FrictionContact> + 'a {
+    contacts.iter().map(move |c| {
+        let against_obstacle = c.nodes.iter().any(|&i| i >= n);
+        let mu = if against_obstacle { world.params.friction } else { world.params.self_friction };
+        FrictionContact::new(c.nodes, c.w, c.n, c.thickness, c.stiffness, mu)
+    })
+}
 
 /// What an attempt has fixed before its checks: the step, its start and its contacts.
 struct StepData {
@@ -30,6 +55,10 @@ struct StepData {
     inv_mass: Vec<Real>,
     /// Elastic energy at the start (from the assembly).
     u0: Real,
+    /// The work friction may do on the cloth over the step (a moving obstacle's drag).
+    friction_work: Real,
+    /// The contacts that stuck.
+    stuck: Vec<[usize; 4]>,
     /// The fastest obstacle vertex's speed over the step.
     obstacle_speed: Real,
 }
@@ -91,9 +120,6 @@ impl Simulation {
         let (step, v) = self.timed(Stage::Integration, |s| s.step_data(h, t1, pinned, contacts, &out));
         let solved = self.timed(Stage::FaultChecks, |s| checks::after_solve(&s.context(&step), v))?;
         let mut v = solved.v.clone();
-        if !step.contacts.is_empty() {
-            self.timed(Stage::Friction, |s| s.friction(&step, &mut v));
-        }
         let mut x = self.timed(Stage::Integration, |s| s.end_positions(&step, &v));
         self.constrain(&step.x0, &step.inv_mass, step.h, &mut x, &mut v);
         if self.ws.collisions.is_some() {
@@ -103,7 +129,7 @@ impl Simulation {
             }
         }
         self.timed(Stage::FaultChecks, |s| checks::end_of_step(&s.context(&step), &solved, &x, &v))?;
-        self.commit(x, v, t1);
+        self.commit(x, v, t1, step.stuck);
         Ok(())
     }
 
@@ -124,20 +150,50 @@ impl Simulation {
     fn proximity(&mut self, t1: Real) -> Vec<Contact> {
         let Some(world) = &mut self.ws.collisions else { return Vec::new() };
         world.advance(self.state.time, t1);
-        let contacts = world.proximity(&self.state.mesh, &self.ws.node_area);
+        let contacts = world.proximity(&self.state.mesh, &self.ws.node_area, t1 - self.state.time);
         self.ws.counters.contacts += contacts.len();
         contacts
     }
 
-    /// Assembles, factorises and solves the linearised backward-Euler system (each part timed
-    /// by the solver). A matrix that is not positive definite is a fault to retry.
+    /// Assembles the linearised backward-Euler system once, then solves it with the friction
+    /// of the step's contacts until every contact sticks or slides as Coulomb's law says at the
+    /// solved velocities (`collision::friction`; a change of modes refactorises, a change of
+    /// sliding forces only re-solves). A matrix that is not positive definite is a fault to
+    /// retry.
     fn implicit_solve(
         &mut self,
         h: Real,
         pinned: &[Option<Vec3>],
         contacts: &[Contact],
-    ) -> Result<StepOutput, StepFault> {
-        let fixed: &[Vec3] = self.ws.collisions.as_ref().map(|w| w.obs_x1.as_slice()).unwrap_or(&[]);
+    ) -> Result<Implicit, StepFault> {
+        let nodes = &self.state.mesh.nodes;
+        let x0 = self.state.mesh.positions();
+        let v0: Vec<Vec3> = nodes.iter().map(|n| n.v).collect();
+        let inv_mass: Vec<Real> = nodes
+            .iter()
+            .zip(pinned)
+            .map(|(n, p)| if p.is_some() || n.mass <= 0.0 { 0.0 } else { 1.0 / n.mass })
+            .collect();
+        let world = self.ws.collisions.as_ref();
+        let fixed: &[Vec3] = world.map(|w| w.obs_x1.as_slice()).unwrap_or(&[]);
+        let fixed_v = world.map(|w| w.obstacle_velocities(h)).unwrap_or_default();
+        let frame = FrictionFrame { h, x0: &x0, v0: &v0, inv_mass: &inv_mass, fixed_x: fixed, fixed_v: &fixed_v };
+        let clock = Instant::now();
+        let mut friction = match world {
+            Some(w) if !contacts.is_empty() => {
+                let system = &self.ws.system;
+                let stuck = &self.state.stuck;
+                Friction::new(
+                    friction_contacts(contacts, nodes.len(), w),
+                    &frame,
+                    |c| system.couples(c, nodes.len()),
+                    stuck,
+                )
+            }
+            _ => Friction { contacts: Vec::new(), pending: 0 },
+        };
+        let mut speculative = Speculative::new(contacts, &frame);
+        let mut friction_s = clock.elapsed().as_secs_f64();
         let input = StepInput {
             mesh: &self.state.mesh,
             rest: &self.ws.rest,
@@ -149,14 +205,69 @@ impl Simulation {
             contacts,
             fixed,
         };
-        let out = self.ws.system.solve_step(&input).map_err(|source| match source {
+        let fatal = |source| match source {
             SolveError::NotPositiveDefinite(_) => StepFault::Retry(Fault::Factorisation(source)),
             _ => StepFault::Fatal(SimError::Solve { step: self.state.steps, time: self.state.time, source }),
-        })?;
-        self.ws.timers.add(Stage::Assembly, out.assemble_s);
-        self.ws.timers.add(Stage::Factorisation, out.factor_s);
-        self.ws.timers.add(Stage::Solve, out.solve_s);
-        Ok(out)
+        };
+        let mut timing = SolveTiming::default();
+        let clock = Instant::now();
+        let u0 = self.ws.system.assemble(&input);
+        timing.assemble_s += clock.elapsed().as_secs_f64();
+        let (mut refactor, mut converged) = (true, true);
+        let v = loop {
+            let mut terms = friction.terms(&frame);
+            terms.extend(speculative.terms(&frame));
+            let again = !friction.is_empty() || !speculative.is_empty();
+            let dv = self.ws.system.solve(&input, &terms, refactor, again, &mut timing).map_err(fatal)?;
+            let v: Vec<Vec3> = v0.iter().zip(&dv).map(|(v, dv)| v + dv).collect();
+            if friction.is_empty() && speculative.is_empty() {
+                break v;
+            }
+            if timing.solves == friction::MAX_SOLVES {
+                converged = false;
+                break v;
+            }
+            let clock = Instant::now();
+            let modes = match timing.factorisations {
+                f if f <= friction::MAX_REFACTORS => Budget::All,
+                f if f <= friction::MAX_REFACTORS + friction::MAX_RELEASES => Budget::Release,
+                _ => Budget::None,
+            };
+            // Contacts that switch on or off change what the step is (a pull or an unseen
+            // penetration), like an overloaded stick: worth a refactorisation in either budget.
+            let contacts_change = speculative.update(&frame, &v, modes != Budget::None);
+            let change = match friction.is_empty() {
+                true => Change::None,
+                false => friction.update(&frame, &v, timing.solves == 1, modes),
+            };
+            friction_s += clock.elapsed().as_secs_f64();
+            match change.max(contacts_change) {
+                Change::None => {
+                    converged = friction.pending == 0 && speculative.pending == 0;
+                    break v;
+                }
+                Change::Rhs => refactor = false,
+                Change::Modes => refactor = true,
+            }
+        };
+        let clock = Instant::now();
+        let friction_work = friction.drag_work(&frame, &v);
+        let (stick, slide) = friction.counts();
+        friction_s += clock.elapsed().as_secs_f64();
+        let c = &mut self.ws.counters;
+        c.sticking += stick;
+        c.sliding += slide;
+        c.friction_resolves += timing.solves - 1;
+        c.friction_refactors += timing.factorisations - 1;
+        c.friction_unconverged += usize::from(!converged);
+        let timers = &mut self.ws.timers;
+        timers.add(Stage::Assembly, timing.assemble_s);
+        timers.add(Stage::Factorisation, timing.factor_s);
+        timers.add(Stage::Solve, timing.solve_s);
+        if !friction.is_empty() {
+            timers.add(Stage::Friction, friction_s);
+        }
+        Ok(Implicit { v, u0, friction_work, stuck: friction.stuck() })
     }
 
     /// The solved end-of-step velocities (handles: their prescribed ones) and what the later
@@ -167,10 +278,10 @@ impl Simulation {
         t1: Real,
         pinned: Vec<Option<Vec3>>,
         contacts: Vec<Contact>,
-        out: &StepOutput,
+        out: &Implicit,
     ) -> (StepData, Vec<Vec3>) {
         let nodes = &self.state.mesh.nodes;
-        let v: Vec<Vec3> = nodes.iter().zip(&out.dv).zip(&pinned).map(|((n, dv), p)| p.unwrap_or(n.v + dv)).collect();
+        let v: Vec<Vec3> = out.v.iter().zip(&pinned).map(|(v, p)| p.unwrap_or(*v)).collect();
         let inv_mass = nodes
             .iter()
             .zip(&pinned)
@@ -181,8 +292,8 @@ impl Simulation {
             None => 0.0,
         };
         let x0 = self.state.mesh.positions();
-        let u0 = out.elastic_energy;
-        (StepData { h, t1, x0, pinned, contacts, inv_mass, u0, obstacle_speed }, v)
+        let (u0, friction_work, stuck) = (out.u0, out.friction_work, out.stuck.clone());
+        (StepData { h, t1, x0, pinned, contacts, inv_mass, u0, friction_work, stuck, obstacle_speed }, v)
     }
 
     /// What the fault checks judge the step by.
@@ -200,28 +311,8 @@ impl Simulation {
             thickness: world.map_or(0.0, |w| w.params.thickness),
             obstacle_speed: step.obstacle_speed,
             u0: step.u0,
+            friction_work: step.friction_work,
         }
-    }
-
-    /// Coulomb friction on the step's contacts, evaluated at the tentative end positions
-    /// (Bridson et al. 2002, §7.2: a velocity filter after the solve).
-    fn friction(&self, step: &StepData, v: &mut [Vec3]) {
-        let Some(world) = &self.ws.collisions else { return };
-        let (n, h) = (self.state.mesh.nodes.len(), step.h);
-        let x_end: Vec<Vec3> = step.x0.iter().zip(v.iter()).map(|(x, v)| x + h * v).collect();
-        let fixed_v = world.obstacle_velocities(h);
-        let fc: Vec<FrictionContact> = step
-            .contacts
-            .iter()
-            .map(|c| {
-                let against_obstacle = c.nodes.iter().any(|&i| i >= n);
-                let mu = if against_obstacle { world.params.friction } else { world.params.self_friction };
-                FrictionContact { nodes: c.nodes, w: c.w, n: c.n, thickness: c.thickness, stiffness: c.stiffness, mu }
-            })
-            .collect();
-        let mut state =
-            FrictionState { x: &x_end, v, inv_mass: &step.inv_mass, fixed_x: &world.obs_x1, fixed_v: &fixed_v };
-        apply_friction(&mut state, &fc, h);
     }
 
     /// x₁ = x₀ + h v, with handle nodes exactly on their targets (no rounding drift).
@@ -254,7 +345,8 @@ impl Simulation {
     }
 
     /// Takes the checked end-of-step state.
-    fn commit(&mut self, x: Vec<Vec3>, v: Vec<Vec3>, t1: Real) {
+    fn commit(&mut self, x: Vec<Vec3>, v: Vec<Vec3>, t1: Real, stuck: Vec<[usize; 4]>) {
+        self.state.stuck = stuck;
         for (node, (x, v)) in self.state.mesh.nodes.iter_mut().zip(x.into_iter().zip(v)) {
             node.x = x;
             node.v = v;

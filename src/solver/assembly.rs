@@ -5,6 +5,7 @@
 
 use rayon::prelude::*;
 
+use crate::collision::friction::FrictionTerm;
 use crate::collision::proximity::{repulsion, Contact};
 use crate::forces::material::Material;
 use crate::forces::wind::{wind_face, Wind};
@@ -13,7 +14,7 @@ use crate::math::{Mat12, Mat3, Real, Vec12, Vec3, Vec9};
 use crate::mesh::Mesh;
 
 use super::pattern::NONE;
-use super::{ImplicitSystem, SolveError};
+use super::{ImplicitSystem, SolveError, SolveTiming};
 
 /// A contact coupling absent from the pattern (see `add_contacts`).
 const MISSING: usize = usize::MAX - 1;
@@ -35,16 +36,6 @@ pub struct StepInput<'a> {
     pub contacts: &'a [Contact],
     /// Positions of the fixed points (obstacle vertices) that contacts index past the nodes.
     pub fixed: &'a [Vec3],
-}
-
-#[derive(Clone, Debug, Default)]
-pub struct StepOutput {
-    pub dv: Vec<Vec3>,
-    /// Elastic (membrane + bending) energy at the start of the step (J).
-    pub elastic_energy: Real,
-    pub assemble_s: f64,
-    pub factor_s: f64,
-    pub solve_s: f64,
 }
 
 struct Local<const N: usize, const M: usize> {
@@ -111,33 +102,63 @@ fn scatter<const N: usize, const M: usize>(
 }
 
 impl ImplicitSystem {
-    /// Assembles, factorises and solves one step's system; returns Δv.
-    pub fn solve_step(&mut self, inp: &StepInput) -> Result<StepOutput, SolveError> {
+    /// Assembles the step's system without friction (elastic forces, damping, wind, gravity,
+    /// repulsion); returns the elastic energy at the start of the step. `solve` adds the friction
+    /// terms and the pinned nodes.
+    pub fn assemble(&mut self, inp: &StepInput) -> Real {
+        let energy = self.assemble_base(inp);
+        self.base_saved = false;
+        energy
+    }
+
+    /// Solves the assembled system with the friction and contact `terms` added; returns Δv.
+    /// With `refactor` false the matrix must be the one last factorised (only the right-hand
+    /// side changed). `again`: the step may solve again with other terms (the assembled system
+    /// is then kept).
+    pub fn solve(
+        &mut self,
+        inp: &StepInput,
+        terms: &[FrictionTerm],
+        refactor: bool,
+        again: bool,
+        timing: &mut SolveTiming,
+    ) -> Result<Vec<Vec3>, SolveError> {
         let t0 = std::time::Instant::now();
-        let energy = self.assemble(inp);
+        if self.base_saved {
+            self.blocks.copy_from_slice(&self.base_blocks);
+            self.rhs.copy_from_slice(&self.base_rhs);
+        } else if again {
+            // Kept for the re-solves of this step.
+            self.base_blocks.clone_from(&self.blocks);
+            self.base_rhs.clone_from(&self.rhs);
+            self.base_saved = true;
+        }
+        self.add_friction(inp, terms);
+        self.eliminate_pinned(inp);
         let t1 = std::time::Instant::now();
-        let blocks = &self.blocks;
-        self.values.par_iter_mut().zip(self.chol.value_sources().par_iter()).for_each(|(v, &s)| {
-            let b = &blocks[s / 9];
-            *v = b[((s % 9) / 3, s % 3)];
-        });
-        self.chol.factor(&self.values)?;
+        timing.assemble_s += (t1 - t0).as_secs_f64();
+        if refactor {
+            let blocks = &self.blocks;
+            self.values.par_iter_mut().zip(self.chol.value_sources().par_iter()).for_each(|(v, &s)| {
+                let b = &blocks[s / 9];
+                *v = b[((s % 9) / 3, s % 3)];
+            });
+            self.chol.factor(&self.values)?;
+            timing.factorisations += 1;
+        }
         let t2 = std::time::Instant::now();
         let mut x: Vec<f64> = self.rhs.iter().flat_map(|r| [r.x, r.y, r.z]).collect();
         self.chol.solve(&mut x);
         let dv = x.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
         let t3 = std::time::Instant::now();
-        Ok(StepOutput {
-            dv,
-            elastic_energy: energy,
-            assemble_s: (t1 - t0).as_secs_f64(),
-            factor_s: (t2 - t1).as_secs_f64(),
-            solve_s: (t3 - t2).as_secs_f64(),
-        })
+        timing.factor_s += (t2 - t1).as_secs_f64();
+        timing.solve_s += (t3 - t2).as_secs_f64();
+        timing.solves += 1;
+        Ok(dv)
     }
 
     /// Fills `blocks` and `rhs`; returns the elastic energy.
-    fn assemble(&mut self, inp: &StepInput) -> Real {
+    fn assemble_base(&mut self, inp: &StepInput) -> Real {
         let mesh = inp.mesh;
         self.blocks.iter_mut().for_each(|b| *b = Mat3::zeros());
         for (r, n) in self.rhs.iter_mut().zip(&mesh.nodes) {
@@ -175,7 +196,6 @@ impl ImplicitSystem {
             }
         }
         self.add_contacts(inp);
-        self.eliminate_pinned(inp);
         energy
     }
 
@@ -228,6 +248,43 @@ impl ImplicitSystem {
                 }
             }
         }
+    }
+
+    /// Friction terms (`collision::friction`): their right-hand sides, and a sticking contact's
+    /// damper h c T between each pair of its cloth nodes, weighted wₐ w_b (PSD: (w wᵀ) ⊗ T).
+    /// A coupling missing from the pattern enters as the diagonal majorizer, as in
+    /// `add_contacts`.
+    fn add_friction(&mut self, inp: &StepInput, terms: &[FrictionTerm]) {
+        let n = inp.mesh.nodes.len();
+        for t in terms {
+            let slots = self.contact_slots(&t.nodes, n);
+            let cloth = t.nodes.iter().filter(|&&i| i < n).count() as Real;
+            let complete = slots.iter().all(|&s| s != MISSING);
+            for a in 0..4 {
+                let i = t.nodes[a];
+                if i >= n {
+                    continue;
+                }
+                self.rhs[i] += t.rhs[a];
+                let Some(d) = t.damper else { continue };
+                if !complete {
+                    let diag = self.pattern.col_start[i]; // first in its column
+                    self.blocks[diag] += (cloth * t.w[a] * t.w[a]) * d;
+                    continue;
+                }
+                for b in 0..4 {
+                    let s = slots[4 * a + b];
+                    if s != NONE {
+                        self.blocks[s] += (t.w[a] * t.w[b]) * d;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Whether the pattern has every block between the cloth nodes (below `n`) of `nodes`.
+    pub fn couples(&self, nodes: &[usize; 4], n: usize) -> bool {
+        self.contact_slots(nodes, n).iter().all(|&s| s != MISSING)
     }
 
     /// Block index of each lower-triangle cloth–cloth coupling (a, b) of a contact; `NONE` for

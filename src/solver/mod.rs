@@ -11,7 +11,7 @@ pub mod assembly;
 pub mod cholesky;
 pub mod pattern;
 
-pub use assembly::{StepInput, StepOutput};
+pub use assembly::StepInput;
 pub use cholesky::SolveError;
 
 use crate::math::{Mat3, Vec3};
@@ -25,6 +25,20 @@ pub struct ImplicitSystem {
     blocks: Vec<Mat3>,
     rhs: Vec<Vec3>,
     values: Vec<f64>,
+    /// The step's system before friction and pinning, kept while friction re-solves it.
+    base_blocks: Vec<Mat3>,
+    base_rhs: Vec<Vec3>,
+    base_saved: bool,
+}
+
+/// Time and work of a step's solves.
+#[derive(Clone, Debug, Default)]
+pub struct SolveTiming {
+    pub assemble_s: f64,
+    pub factor_s: f64,
+    pub solve_s: f64,
+    pub factorisations: usize,
+    pub solves: usize,
 }
 
 impl ImplicitSystem {
@@ -35,6 +49,15 @@ impl ImplicitSystem {
         let blocks = vec![Mat3::zeros(); pattern.num_blocks()];
         let rhs = vec![Vec3::zeros(); pattern.nodes];
         let values = vec![0.0; csc.row_idx.len()];
-        Ok(ImplicitSystem { pattern, chol, blocks, rhs, values })
+        Ok(ImplicitSystem {
+            pattern,
+            chol,
+            blocks,
+            rhs,
+            values,
+            base_blocks: Vec::new(),
+            base_rhs: Vec::new(),
+            base_saved: false,
+        })
     }
 }
