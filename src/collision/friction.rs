@@ -127,6 +127,16 @@ pub struct FrictionFrame<'a> {
     pub fixed_v: &'a [Vec3],
 }
 
+#[cfg(test)]
+impl<'a> FrictionFrame<'a> {
+    /// A unit-mass cloth node against one fixed point at the origin moving at `fixed_v[0]`,
+    /// h = 0.01 s: the unit tests' frame.
+    pub(crate) fn one_node(x0: &'a [Vec3], v0: &'a [Vec3], fixed_v: &'a [Vec3]) -> Self {
+        const ORIGIN: &[Vec3] = &[Vec3::new(0.0, 0.0, 0.0)];
+        FrictionFrame { h: 0.01, x0, v0, inv_mass: &[1.0], fixed_x: ORIGIN, fixed_v }
+    }
+}
+
 impl FrictionFrame<'_> {
     /// Position and velocity of participant `i` with cloth velocities `v`.
     pub(crate) fn point(&self, i: usize, v: &[Vec3]) -> (Vec3, Vec3) {
@@ -432,14 +442,8 @@ mod tests {
     fn one(mu: Real, v: Vec3, fixed_v: Vec3, depth: Real) -> (Friction, [Vec3; 1], [Vec3; 1]) {
         let x0 = [Vec3::new(0.0, 0.0, 2e-3 - depth)];
         let v0 = [v];
-        let frame = FrictionFrame {
-            h: 0.01,
-            x0: &x0,
-            v0: &v0,
-            inv_mass: &[1.0],
-            fixed_x: &[Vec3::zeros()],
-            fixed_v: &[fixed_v],
-        };
+        let fixed_v = [fixed_v];
+        let frame = FrictionFrame::one_node(&x0, &v0, &fixed_v);
         let c = FrictionContact::new([0, 1, 0, 0], [1.0, -1.0, 0.0, 0.0], Vec3::z(), 2e-3, 1000.0, mu);
         (Friction::new(std::iter::once(c), &frame, |_| true, &[]), x0, v0)
     }
@@ -470,14 +474,8 @@ mod tests {
     #[test]
     fn stick_term_is_a_tangential_damper_toward_the_obstacle_velocity() {
         let (f, x0, v0) = one(0.5, Vec3::new(1e-3, 0.0, 2e-3), Vec3::new(0.0, 1e-3, 0.0), 1e-3);
-        let frame = FrictionFrame {
-            h: 0.01,
-            x0: &x0,
-            v0: &v0,
-            inv_mass: &[1.0],
-            fixed_x: &[Vec3::zeros()],
-            fixed_v: &[Vec3::new(0.0, 1e-3, 0.0)],
-        };
+        let fixed_v = [Vec3::new(0.0, 1e-3, 0.0)];
+        let frame = FrictionFrame::one_node(&x0, &v0, &fixed_v);
         let t = f.terms(&frame)[0];
         let c = STICK_STIFFNESS / 0.01;
         // h c T, and h · (−c T v_rel) with v_rel = (1e-3, −1e-3, 2e-3): no normal part.
@@ -489,14 +487,8 @@ mod tests {
     #[test]
     fn update_slides_a_stick_beyond_the_bound_and_sticks_a_reversed_slide() {
         let (mut f, x0, v0) = one(0.5, Vec3::new(1e-3, 0.0, 0.0), Vec3::zeros(), 1e-3);
-        let frame = FrictionFrame {
-            h: 0.01,
-            x0: &x0,
-            v0: &v0,
-            inv_mass: &[1.0],
-            fixed_x: &[Vec3::zeros()],
-            fixed_v: &[Vec3::zeros()],
-        };
+        let fixed_v = [Vec3::zeros()];
+        let frame = FrictionFrame::one_node(&x0, &v0, &fixed_v);
         assert_eq!(f.contacts[0].mode, Mode::Stick);
         // c = 1e5: a residual slip of 1e-6 m/s needs 0.1 N ≤ μ f_n = 0.5 (f_n at x₀ + h v).
         assert_eq!(f.update(&frame, &[Vec3::new(1e-6, 0.0, 0.0)], true, Budget::All), Change::None);
@@ -517,14 +509,8 @@ mod tests {
         let x0 = [Vec3::new(0.0, 0.0, 1e-3)];
         let v = [Vec3::new(0.5, 0.0, 0.0)];
         for (fixed_v, positive) in [(Vec3::zeros(), false), (Vec3::new(1.0, 0.0, 0.0), true)] {
-            let frame = FrictionFrame {
-                h: 0.01,
-                x0: &x0,
-                v0: &v,
-                inv_mass: &[1.0],
-                fixed_x: &[Vec3::zeros()],
-                fixed_v: &[fixed_v],
-            };
+            let fixed_v = [fixed_v];
+            let frame = FrictionFrame::one_node(&x0, &v, &fixed_v);
             let c = FrictionContact::new([0, 1, 0, 0], [1.0, -1.0, 0.0, 0.0], Vec3::z(), 2e-3, 1000.0, 0.5);
             let f = Friction::new(std::iter::once(c), &frame, |_| true, &[]);
             assert_eq!(f.drag_work(&frame, &v) > 0.0, positive);

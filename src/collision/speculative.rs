@@ -124,14 +124,8 @@ mod tests {
     fn a_pair_closing_within_the_step_starts_active_and_one_stopping_short_is_switched_off() {
         // 3 mm up, falling at 0.2 m/s, h = 0.01: predicted 1 mm, inside the 2 mm thickness.
         let (x0, v0, c) = setup(3e-3, -0.2);
-        let frame = FrictionFrame {
-            h: 0.01,
-            x0: &x0,
-            v0: &v0,
-            inv_mass: &[1.0],
-            fixed_x: &[Vec3::zeros()],
-            fixed_v: &[Vec3::zeros()],
-        };
+        let fixed_v = [Vec3::zeros()];
+        let frame = FrictionFrame::one_node(&x0, &v0, &fixed_v);
         let mut s = Speculative::new(&[c], &frame);
         assert_eq!(s.counts(), (1, 1));
         let t = s.terms(&frame)[0];
@@ -149,14 +143,8 @@ mod tests {
     #[test]
     fn contacts_inside_at_the_start_are_left_to_the_assembly() {
         let (x0, v0, c) = setup(1e-3, 0.0);
-        let frame = FrictionFrame {
-            h: 0.01,
-            x0: &x0,
-            v0: &v0,
-            inv_mass: &[1.0],
-            fixed_x: &[Vec3::zeros()],
-            fixed_v: &[Vec3::zeros()],
-        };
+        let fixed_v = [Vec3::zeros()];
+        let frame = FrictionFrame::one_node(&x0, &v0, &fixed_v);
         assert!(Speculative::new(&[c], &frame).is_empty());
     }
 }
