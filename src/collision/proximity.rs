@@ -126,7 +126,7 @@ pub fn obstacle_edge_contact(
     stiffness: Real,
     reach: Real,
     outward: &Vec3,
-    opposite: &[Vec3],
+    opposite: impl IntoIterator<Item = Vec3>,
 ) -> Option<Contact> {
     let sc = closest_segments(&x[0], &x[1], &x[2], &x[3]);
     let inner = |s: Real| s > END_TOLERANCE && s < 1.0 - END_TOLERANCE;
@@ -141,7 +141,7 @@ pub fn obstacle_edge_contact(
     // stayed on the moving sphere 6 frames longer and stretched 40%, obstacle friction off).
     let p = x[0] * (1.0 - sc.s) + x[1] * sc.s;
     let e = x[3] - x[2];
-    let over_a_triangle = opposite.iter().any(|o| {
+    let over_a_triangle = opposite.into_iter().any(|o| {
         let toward = e.cross(&(o - x[2])).cross(&e);
         toward.dot(&(p - x[2])) > 0.0
     });
@@ -286,9 +286,9 @@ mod tests {
         let up = Vec3::z();
         let x = [v(-0.5, 0.0, 0.003), v(0.5, 0.0, 0.003), c, d];
         let valley = [v(-1.0, 0.0, 0.577), v(1.0, 0.0, 0.577)];
-        assert!(obstacle_edge_contact([0, 1, 2, 3], &x, 0.005, 1.0, 0.005, &up, &valley).is_none());
+        assert!(obstacle_edge_contact([0, 1, 2, 3], &x, 0.005, 1.0, 0.005, &up, valley).is_none());
         let ridge = [v(-1.0, 0.0, -0.577), v(1.0, 0.0, -0.577)];
-        let k = obstacle_edge_contact([0, 1, 2, 3], &x, 0.005, 1.0, 0.005, &up, &ridge).expect("in the wedge");
+        let k = obstacle_edge_contact([0, 1, 2, 3], &x, 0.005, 1.0, 0.005, &up, ridge).expect("in the wedge");
         assert!(k.n.dot(&up) > 0.99, "pushes out of the obstacle: {:?}", k.n);
     }
 }

@@ -213,12 +213,10 @@ impl CollisionWorld {
                 VF => node_face_contact(nodes, &xs, detect, k),
                 _ if nodes[2] >= n => {
                     let e = [(nodes[2] - n).min(nodes[3] - n), (nodes[2] - n).max(nodes[3] - n)];
-                    let opposite: Vec<Vec3> = this
-                        .obs_edges
-                        .binary_search(&e)
-                        .map(|i| this.obs_edge_opposite[i].iter().map(|&o| this.obs_x1[o]).collect())
-                        .unwrap_or_default();
-                    obstacle_edge_contact(nodes, &xs, detect, k, reach.max(detect), &out, &opposite)
+                    let opposite: &[usize] =
+                        this.obs_edges.binary_search(&e).map_or(&[], |i| &this.obs_edge_opposite[i]);
+                    let opposite = opposite.iter().map(|&o| this.obs_x1[o]);
+                    obstacle_edge_contact(nodes, &xs, detect, k, reach.max(detect), &out, opposite)
                 }
                 _ => edge_edge_contact(nodes, &xs, detect, k),
             };
