@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use serde_json::json;
 use viewcloth::constraints::lra::Constraint;
-use viewcloth::constraints::strain_limit::face_stretches;
+use viewcloth::constraints::strain_limit::{face_stretches, TOLERANCE};
 use viewcloth::math::{Real, Vec2};
 use viewcloth::scene;
 use viewcloth::sim::Simulation;
@@ -244,13 +244,34 @@ fn stretch_range(sim: &Simulation) -> (Real, Real) {
     (lo, hi)
 }
 
-/// ARCSim's flag.json sets `strain_limits: [0.95, 1.05]`, and now runs with them. The issue's
-/// bound (every face within the limits to the solver tolerance after projection) is NOT met:
-/// the Gauss–Seidel projection does not converge on this flag once it is remeshed (README,
-/// Status). The test pins what holds: the run goes on, its stats report the projection, and
-/// the stretch outside the limits is never worse than without them.
+/// Principal stretches of every face from the mesh's positions and material coordinates,
+/// computed here (first fundamental form in material coordinates, its eigenvalues in closed
+/// form) rather than by the limiter's code.
+fn stretches_from_mesh(sim: &Simulation) -> Vec<(Real, Real)> {
+    let m = sim.mesh();
+    (0..m.faces.len())
+        .map(|f| {
+            let [a, b, c] = m.face_nodes(f).map(|n| m.nodes[n].x);
+            let [ua, ub, uc] = m.face_uv(f);
+            let (e1, e2) = (b - a, c - a);
+            let (d1, d2) = (ub - ua, uc - ua);
+            let det = d1.x * d2.y - d2.x * d1.y;
+            // Columns of D_m⁻¹ combine the edges into F's columns.
+            let f0 = (e1 * d2.y - e2 * d1.y) / det;
+            let f1 = (e2 * d1.x - e1 * d2.x) / det;
+            let (g00, g01, g11) = (f0.dot(&f0), f0.dot(&f1), f1.dot(&f1));
+            let (mean, r) = (0.5 * (g00 + g11), (0.25 * (g00 - g11).powi(2) + g01 * g01).sqrt());
+            ((mean - r).max(0.0).sqrt(), (mean + r).sqrt())
+        })
+        .collect()
+}
+
+/// ARCSim's flag.json sets `strain_limits: [0.95, 1.05]` (the bound): after every
+/// step's projection no face's principal stretch is outside them by more than the solver
+/// tolerance, and at every frame end (after collision handling and remeshing) the faces, measured
+/// independently, are still within them; without limits the flag leaves them by far.
 #[test]
-fn arcsim_flag_runs_with_its_strain_limits() {
+fn arcsim_flag_stays_within_its_strain_limits() {
     let conf = crate_dir().join("../shared/arcsim/conf/flag.json");
     if !conf.is_file() {
         eprintln!("SKIP: ARCSim data not found at {}", conf.display());
@@ -262,24 +283,27 @@ fn arcsim_flag_runs_with_its_strain_limits() {
     free_scene.cloths[0].strain_limits = None;
     let mut sim = Simulation::new(loaded.scene).unwrap();
     let mut free = Simulation::new(free_scene).unwrap();
-    let (mut out_with, mut out_without) = (0.0 as Real, 0.0 as Real);
-    for frame in 1..=3 {
+    let mut out_without: Real = 0.0;
+    for frame in 1..=8 {
         sim.advance_frame().unwrap();
         free.advance_frame().unwrap();
         let mut fs = sim.measure(frame);
         sim.constraint_stats(&mut fs);
         let st = fs.strain_limit.expect("strain limit stats");
-        let ((lo, hi), (flo, fhi)) = (stretch_range(&sim), stretch_range(&free));
+        let s = stretches_from_mesh(&sim);
+        let lo = s.iter().map(|s| s.0).fold(Real::INFINITY, Real::min);
+        let hi = s.iter().map(|s| s.1).fold(0.0, Real::max);
+        let (flo, fhi) = stretch_range(&free);
         eprintln!(
             "flag frame {frame}: {} faces; stretches with limits [{lo:.4}, {hi:.4}], without [{flo:.4}, {fhi:.4}]; {st:?}",
             sim.mesh().faces.len()
         );
-        out_with = out_with.max(0.95 - lo).max(hi - 1.05);
+        assert_eq!(st.strain_limit_unconverged, 0, "frame {frame}: a projection stopped short: {st:?}");
+        assert!(st.strain_limit_excess <= TOLERANCE, "frame {frame}: {st:?}");
+        assert!(lo >= 0.95 - TOLERANCE && hi <= 1.05 + TOLERANCE, "frame {frame}: stretches [{lo}, {hi}]");
         out_without = out_without.max(0.95 - flo).max(fhi - 1.05);
-        assert!(st.strain_limit_excess >= 0.0);
     }
-    assert!(out_without > 0.0, "without limits the flag should leave [0.95, 1.05]");
-    assert!(out_with <= out_without, "with limits {out_with}, without {out_without}");
+    assert!(out_without > 0.1, "without limits the flag should leave [0.95, 1.05] by far: {out_without}");
 }
 
 #[test]

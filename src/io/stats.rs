@@ -68,9 +68,9 @@ pub struct LraFrameStats {
 pub struct StrainLimitFrameStats {
     /// Faces with a principal stretch at a limit (within 1e-4) or beyond it at the frame end.
     pub strain_limit_faces: usize,
-    /// Most projection sweeps of a step in the frame.
-    pub strain_limit_sweeps: usize,
-    /// Steps whose projection stopped at the sweep cap.
+    /// Most Gauss–Newton iterations (factorisations) of a step's projection in the frame.
+    pub strain_limit_iterations: usize,
+    /// Steps whose projection stopped short of the tolerance (iteration cap) or was undone.
     pub strain_limit_unconverged: usize,
     /// Largest principal stretch outside the limits right after a projection (before collisions).
     pub strain_limit_excess: f64,

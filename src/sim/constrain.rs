@@ -8,7 +8,7 @@
 //! handle switches on or off, never checkpointed.
 
 use crate::constraints::lra::{islands, Attachment, Lra, LraParams};
-use crate::constraints::strain_limit::{faces_at_limit, limit_strain, TOLERANCE};
+use crate::constraints::strain_limit::{faces_at_limit, StrainLimiter, TOLERANCE};
 use crate::io::stats::{FrameStats, LraFrameStats, StrainLimitFrameStats};
 use crate::math::{Real, Vec3};
 use crate::scene::Scene;
@@ -34,7 +34,9 @@ pub struct LraStage {
 pub struct StrainLimitStage {
     /// Per material (one per cloth).
     pub limits: Vec<Option<[Real; 2]>>,
-    sweeps: usize,
+    /// The projection's system, kept until a remesh changes the faces.
+    limiter: Option<StrainLimiter>,
+    iterations: usize,
     unconverged: usize,
     excess: Real,
 }
@@ -76,7 +78,7 @@ impl Constraints {
             for c in &scene.cloths {
                 limits[c.material] = c.strain_limits;
             }
-            StrainLimitStage { limits, sweeps: 0, unconverged: 0, excess: 0.0 }
+            StrainLimitStage { limits, limiter: None, iterations: 0, unconverged: 0, excess: 0.0 }
         });
         (lra.is_some() || strain.is_some()).then_some(Constraints { lra, strain })
     }
@@ -130,8 +132,16 @@ impl Simulation {
         }
         if let Some(stage) = &mut c.strain {
             self.timed(Stage::StrainLimit, |s| {
-                let r = limit_strain(&s.state.mesh, &s.ws.rest.membrane, &stage.limits, x, inv_mass, &mut moved);
-                stage.sweeps = stage.sweeps.max(r.sweeps);
+                let r = StrainLimiter::limit_cached(
+                    &mut stage.limiter,
+                    &s.state.mesh,
+                    &s.ws.rest.membrane,
+                    &stage.limits,
+                    x,
+                    inv_mass,
+                    &mut moved,
+                );
+                stage.iterations = stage.iterations.max(r.iterations);
                 stage.unconverged += usize::from(!r.converged);
                 stage.excess = stage.excess.max(r.excess);
             });
@@ -161,7 +171,7 @@ impl Simulation {
             let at_limit = faces_at_limit(&self.state.mesh, &self.ws.rest.membrane, &stage.limits, &x, TOLERANCE);
             fs.strain_limit = Some(StrainLimitFrameStats {
                 strain_limit_faces: at_limit,
-                strain_limit_sweeps: std::mem::take(&mut stage.sweeps),
+                strain_limit_iterations: std::mem::take(&mut stage.iterations),
                 strain_limit_unconverged: std::mem::take(&mut stage.unconverged),
                 strain_limit_excess: std::mem::take(&mut stage.excess),
             });
