@@ -98,6 +98,9 @@ impl FaceEval {
     }
 }
 
+/// A rank-one Hessian term k v vᵀ over a face's corners: (k, v).
+type RankOne = (Real, [Vec3; 3]);
+
 /// Smallest gap σ₂ − σ₁ in the curvature terms (σ₂ has a kink where the two meet).
 const GAP: Real = 1e-3;
 
@@ -129,7 +132,7 @@ fn eval_face(xs: &[Vec3; 3], rest: &MembraneRest) -> FaceEval {
 ///   d²σ₂ = (e₂₁ + e₁₂)²/(2(σ₂ − σ₁)) + (e₂₁ − e₁₂)²/(2(σ₂ + σ₁)) + e₃₂²/σ₂   (σ₂ convex in F)
 ///   d²σ₁ = −(e₂₁ + e₁₂)²/(2(σ₂ − σ₁)) + (e₂₁ − e₁₂)²/(2(σ₂ + σ₁)) + e₃₁²/σ₁,
 /// so c_hi = w(σ₂ − max) keeps all three terms and c_lo = w(min − σ₁) only the first.
-fn curvature(e: &FaceEval, w: Real) -> ([(Real, [Vec3; 3]); 3], (Real, [Vec3; 3])) {
+fn curvature(e: &FaceEval, w: Real) -> ([RankOne; 3], RankOne) {
     let (s1, s2) = (e.sigma[0], e.sigma[1]);
     let (a, b) = (e.e(1, 0), e.e(0, 1));
     let sum: [Vec3; 3] = std::array::from_fn(|n| a[n] + b[n]);
@@ -336,7 +339,7 @@ impl StrainLimiter {
         for (i, &w) in mw.iter().enumerate() {
             self.blocks[p.col_start[i]] = Mat3::identity() * if inv_mass[i] > 0.0 { w } else { 1.0 };
         }
-        let mut rank_one: Vec<(Real, [Vec3; 3])> = Vec::with_capacity(6);
+        let mut rank_one: Vec<RankOne> = Vec::with_capacity(6);
         for ((c, e), t) in cons.iter().zip(evals).zip(terms) {
             let near = [e.sigma[0] < c.lo + NEAR, e.sigma[1] > c.hi - NEAR];
             if t[0] <= 0.0 && t[1] <= 0.0 && !near[0] && !near[1] {
