@@ -6,6 +6,9 @@
 //! The apply timing does not depend on U's values, so it uses a synthetic dense U whose rows sum
 //! to one (training at N = 7056 would need a 7056² dense eigensolve, minutes here).
 //!
+//! Memory: U's bytes in f64 (the model file's bulk) and f32 (`Compact`, what `apply` holds), and
+//! the size of the model file `upsample train` would write for that U and a fine grid mesh.
+//!
 //! `cargo bench --bench upsample`
 
 use std::time::Instant;
@@ -13,7 +16,10 @@ use std::time::Instant;
 use nalgebra::DMatrix;
 use viewcloth::io::obj::{Corner, ObjData};
 use viewcloth::math::{Real, Vec2, Vec3};
-use viewcloth::upsample::{fit, Compact, Harmonics, Laplacian, Operator, Profile, Surface, TrainingSet};
+use viewcloth::upsample::validate::{cross_validate, grid as profile_grid};
+use viewcloth::upsample::{
+    embedding, fit, Compact, Harmonics, Laplacian, Model, Operator, Prior, Profile, Surface, TrainingSet,
+};
 
 const REPEAT: usize = 200;
 
@@ -26,6 +32,7 @@ fn apply_timing(m: usize, n: usize) {
     let u = DMatrix::from_fn(n, m, |i, j| ((i * 31 + j * 17) % 97) as Real + 1.0);
     let u = DMatrix::from_fn(n, m, |i, j| u[(i, j)] / u.row(i).sum());
     let op = Operator::new(u);
+    memory(&op);
     let pc = DMatrix::from_fn(m, 3, |i, d| (i * 3 + d) as Real * 1e-3);
     let mut pf = DMatrix::zeros(n, 3);
     op.apply_into(&pc, &mut pf); // warm up
@@ -64,6 +71,20 @@ fn apply_timing(m: usize, n: usize) {
     );
 }
 
+/// U's bytes and the model file's size for an `n`-node fine grid (84 × 84 cells for N = 7056).
+fn memory(op: &Operator) {
+    let (n, m) = (op.fine_nodes(), op.coarse_nodes());
+    let side = (n as f64).sqrt().round() as usize;
+    let fine = grid_obj(side - 1);
+    let model = Model::from_fine_obj(op.clone(), &fine);
+    println!(
+        "memory: M {m}, N {n}: U {:.2} MB in f64, {:.2} MB in f32 (Compact, held by apply); model file {:.2} MB",
+        (n * m * 8) as f64 / 1e6,
+        (n * m * 4) as f64 / 1e6,
+        model.to_bytes().len() as f64 / 1e6
+    );
+}
+
 /// Grids `c × c` cells (coarse) and `f × f` (fine) over the unit square, `frames` wavy frames.
 fn training_timing(c: usize, f: usize, frames: usize) {
     let (coarse, fine) = (grid(c), grid(f));
@@ -81,14 +102,25 @@ fn training_timing(c: usize, f: usize, frames: usize) {
     };
     let t = Instant::now();
     let op = fit(&h, &Profile::from_bounds(1.0, 1e5, 4.0, fine.nodes).unwrap(), &data).unwrap();
+    let tf = t.elapsed().as_secs_f64();
+    // The default `--cross-validate` grid: 2 priors × 24 (γ_1, γ_N) × 4 c = 192 profiles, 5 folds.
+    let g = profile_grid(
+        &[Prior::Zero, Prior::Barycentric],
+        &[1e-3, 1e-2, 0.1, 1.0, 10.0],
+        &[1.0, 10.0, 100.0, 1e3, 1e5],
+        &[1.0, 2.0, 4.0, 8.0],
+    );
+    let t = Instant::now();
+    let scores = cross_validate(&h, &embedding(&coarse, &fine), &data, 5, &g).unwrap();
     println!(
-        "train: M {}, N {}, F {frames}, all N modes: harmonics {:.2} s, fit {:.2} s (U {}×{})",
+        "train: M {}, N {}, F {frames}, all N modes: harmonics {th:.2} s, fit {tf:.2} s (U {}×{}); \
+         cross-validation of {} profiles × 5 folds {:.2} s",
         coarse.nodes,
         fine.nodes,
-        th,
-        t.elapsed().as_secs_f64(),
         op.fine_nodes(),
-        op.coarse_nodes()
+        op.coarse_nodes(),
+        scores.len(),
+        t.elapsed().as_secs_f64()
     );
 }
 
@@ -98,6 +130,10 @@ fn s_side(s: &Surface) -> usize {
 
 /// An `n × n`-cell grid over the unit square, as an OBJ frame would give it.
 fn grid(n: usize) -> Surface {
+    Surface::from_obj(&grid_obj(n)).unwrap()
+}
+
+fn grid_obj(n: usize) -> ObjData {
     let side = n + 1;
     let texcoords: Vec<Vec2> =
         (0..side * side).map(|k| Vec2::new((k % side) as Real, (k / side) as Real) / n as Real).collect();
@@ -110,5 +146,5 @@ fn grid(n: usize) -> Surface {
         }
     }
     let positions = texcoords.iter().map(|p| Vec3::new(p.x, p.y, 0.0)).collect();
-    Surface::from_obj(&ObjData { positions, texcoords, triangles, ..ObjData::default() }).unwrap()
+    ObjData { positions, texcoords, triangles, ..ObjData::default() }
 }
