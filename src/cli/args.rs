@@ -418,7 +418,10 @@ pub struct UpsampleTraceArgs {
     /// Harmonic test functions T (paper: 50–80).
     #[arg(long = "test-functions", value_name = "T", default_value_t = 60)]
     pub test_functions: usize,
-    /// Writes DIR/coarse/ and DIR/fine/ (frame_NNNN.obj), the training pair.
+    /// Writes DIR/coarse/ and DIR/fine/ (frame_NNNN.obj and stats.json), the training pair.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
+    /// Worker threads (default: all cores). Results are identical for any count.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
+    pub threads: Option<u64>,
 }

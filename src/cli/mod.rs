@@ -642,6 +642,7 @@ pub fn upsample(cmd: UpsampleCommand) -> Result<(), CliError> {
                 Ok(loaded.scene)
             };
             let (coarse, fine) = (load(&a.coarse)?, load(&a.fine)?);
+            set_threads(a.threads)?;
             let r = crate::upsample::track::trace(coarse, fine, a.test_functions, &a.out).map_err(cli_error)?;
             let worst = r.residual_after.iter().copied().fold(0.0, f64::max);
             let pull = r.residual_before.iter().copied().fold(0.0, f64::max);

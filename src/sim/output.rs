@@ -273,11 +273,11 @@ fn write_stats(dir: &Path, stats: &RunStats) -> Result<(), RunError> {
 
 /// `stats.json` of a run whose frames its caller steps (`upsample trace` steps two in lockstep):
 /// the frame stats, totals and file `simulate` writes (`Output::frames`), rewritten per frame.
+/// Its `total_wall_s` is the sum of its frames' wall times (the caller's other work apart).
 pub struct StatsLog {
     dir: PathBuf,
     stats: RunStats,
     adaptive: bool,
-    started: Instant,
 }
 
 impl StatsLog {
@@ -285,17 +285,12 @@ impl StatsLog {
     /// `view`).
     pub fn new(dir: &Path, sim: &Simulation, mode: &str) -> StatsLog {
         let stats = RunStats { scene: sim.scene.name.clone(), mode: mode.into(), ..Default::default() };
-        StatsLog {
-            dir: dir.to_path_buf(),
-            stats,
-            adaptive: super::run::is_adaptive(&sim.scene),
-            started: Instant::now(),
-        }
+        StatsLog { dir: dir.to_path_buf(), stats, adaptive: super::run::is_adaptive(&sim.scene) }
     }
 
     /// Records frame `k` of the run (counted from its start, preroll included), which took
-    /// `wall_s` of its own, plus the caller's `extra` stages (name, seconds), and rewrites
-    /// stats.json.
+    /// `wall_s` of its own (measuring it is added, as `simulate`'s frames include it), plus the
+    /// caller's `extra` stages (name, seconds), and rewrites stats.json.
     pub fn frame(
         &mut self,
         sim: &mut Simulation,
@@ -303,23 +298,22 @@ impl StatsLog {
         wall_s: f64,
         extra: &[(&str, f64)],
     ) -> Result<(), RunError> {
-        let number = sim.scene.frame_number(k);
+        let (number, clock) = (sim.scene.frame_number(k), Instant::now());
         let mut fs = frame_stats(sim, number.unwrap_or(0), self.adaptive);
-        fs.wall_s = wall_s;
+        fs.wall_s = wall_s + clock.elapsed().as_secs_f64();
+        self.stats.total_wall_s += fs.wall_s;
         for &(stage, t) in extra {
             *fs.stage_s.entry(stage.to_string()).or_insert(0.0) += t;
         }
         let mut ran: Vec<&str> = sim.ws.timers.ran().collect();
         ran.extend(extra.iter().map(|e| e.0));
         record(&mut self.stats, fs, k, number.is_some(), ran.into_iter());
-        self.stats.total_wall_s = self.started.elapsed().as_secs_f64();
         write_stats(&self.dir, &self.stats)
     }
 
     /// Ends the log with why the run stopped (as `simulate` does when a frame fails).
     pub fn fail(&mut self, why: String) -> Result<(), RunError> {
         self.stats.error = Some(why);
-        self.stats.total_wall_s = self.started.elapsed().as_secs_f64();
         write_stats(&self.dir, &self.stats)
     }
 }
