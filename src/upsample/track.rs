@@ -12,8 +12,9 @@
 //! added to the velocities, so the next step does not undo it.
 //!
 //! One cloth per shot (B embeds through material space, where several cloths would overlap).
-//! The projection is not collision-checked: near an obstacle it can move a node inside it
-//! (tracked shots with obstacles are untested).
+//! The projection is not collision-checked: near an obstacle it can move a node inside it, and
+//! cloth through cloth (the skirt of `bench/upsample_garment.sh`: crossings in 13 of 94 frames of
+//! the walk; each run's stats.json counts them).
 
 use std::path::Path;
 use std::time::{Duration, Instant};
