@@ -16,9 +16,11 @@ use std::time::Instant;
 use nalgebra::DMatrix;
 use viewcloth::io::obj::{Corner, ObjData};
 use viewcloth::math::{Real, Vec2, Vec3};
+use viewcloth::upsample::oscillatory::add_modes;
 use viewcloth::upsample::validate::{cross_validate, grid as profile_grid};
 use viewcloth::upsample::{
-    embedding, fit, Compact, Harmonics, Laplacian, Model, Operator, Prior, Profile, Surface, TrainingSet,
+    embedding, fit, Compact, Harmonics, Laplacian, Model, Operator, OscillatoryMode, Prior, Profile, Surface,
+    TrainingSet,
 };
 
 const REPEAT: usize = 200;
@@ -52,23 +54,62 @@ fn apply_timing(m: usize, n: usize) {
         pf.sum()
     );
     // `Compact`: U in f32 about the coarse centroid (what `upsample apply` uses), the whole
-    // call timed (centring, product, conversion back to f64 points).
+    // call timed (centring, product, conversion back to f64 points): `apply` allocating the
+    // result, `apply_into` writing into the caller's buffer (what `upsample apply` does).
     let mut compact = Compact::new(&op);
     let points: Vec<Vec3> = (0..m).map(|i| Vec3::new(pc[(i, 0)], pc[(i, 1)], pc[(i, 2)])).collect();
-    let mut times: Vec<f64> = (0..REPEAT)
-        .map(|_| {
-            let t = Instant::now();
-            std::hint::black_box(compact.apply(&points));
-            t.elapsed().as_secs_f64() * 1e3
-        })
-        .collect();
-    times.sort_by(|a, b| a.total_cmp(b));
+    let times = timed(|| {
+        std::hint::black_box(compact.apply(&points));
+    });
     println!(
         "apply, Compact (U in f32, {:.1} MB): median {:.3} ms, min {:.3} ms per frame",
         mb / 2.0,
         times[REPEAT / 2],
         times[0]
     );
+    let mut fine = vec![Vec3::zeros(); n];
+    let times = timed(|| compact.apply_into(&points, std::hint::black_box(&mut fine)));
+    println!(
+        "apply_into, Compact (no allocation): median {:.3} ms, min {:.3} ms per frame",
+        times[REPEAT / 2],
+        times[0]
+    );
+    // Oscillatory modes (§5) on top: the fine grid's vertex normals and 2 pairs along them,
+    // as `upsample apply` adds them when the model has modes (not in the times above).
+    let side = (n as f64).sqrt().round() as usize;
+    let triangles: Vec<[usize; 3]> = grid_obj(side - 1).triangles.iter().map(|t| t.map(|c| c.v)).collect();
+    let modes: Vec<OscillatoryMode> = (0..2)
+        .map(|k| OscillatoryMode {
+            theta: 0.3 + 0.2 * k as Real,
+            e: (0..n).map(|i| [1e-3, 1e-4 * (i % 7) as Real]).collect(),
+        })
+        .collect();
+    let mut frame = 0;
+    let times = timed(|| {
+        compact.apply_into(&points, &mut fine);
+        add_modes(&modes, &mut fine, &triangles, frame);
+        frame += 1;
+    });
+    println!(
+        "apply_into + 2 oscillatory pairs (normals of {} faces): median {:.3} ms, min {:.3} ms per frame",
+        triangles.len(),
+        times[REPEAT / 2],
+        times[0]
+    );
+}
+
+/// `REPEAT` wall times of `f` in ms, sorted, after one warm-up call.
+fn timed(mut f: impl FnMut()) -> Vec<f64> {
+    f();
+    let mut times: Vec<f64> = (0..REPEAT)
+        .map(|_| {
+            let t = Instant::now();
+            f();
+            t.elapsed().as_secs_f64() * 1e3
+        })
+        .collect();
+    times.sort_by(|a, b| a.total_cmp(b));
+    times
 }
 
 /// U's bytes and the model file's size for an `n`-node fine grid (84 × 84 cells for N = 7056).

@@ -144,8 +144,9 @@ pub fn apply(model: &Model, coarse: &Path, out: &Path) -> Result<usize, RunError
     std::fs::create_dir_all(out).map_err(|e| RunError::Output(format!("{}: {e}", out.display())))?;
     let mut compact = Compact::new(&model.op);
     let triangles = model.triangles();
+    let mut fine = vec![Vec3::zeros(); model.op.fine_nodes()];
     for &k in &numbers {
-        let mut fine = compact.apply(&coarse_positions(model, coarse, k)?);
+        compact.apply_into(&coarse_positions(model, coarse, k)?, &mut fine);
         add_modes(&model.modes, &mut fine, &triangles, k);
         let path = frame_path(out, k);
         write_atomic(&path, obj_text("upsampled", &fine, &model.texcoords, &model.faces).as_bytes())
