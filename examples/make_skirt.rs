@@ -2,7 +2,11 @@
 //! sewn from one flat pattern piece) and `scenes/skirt_mannequin.json` (the skirt pinned at the
 //! waist on a walking mannequin of capsules).
 //!
-//!     cargo run --release --example make_skirt [-- OUT_DIR]      (default: scenes)
+//!     cargo run --release --example make_skirt [-- OUT_DIR [--around N] [--down N]]
+//!
+//! (default: `scenes`, 64 columns around and 22 rows down, the shipped files). Other counts give
+//! the same skirt and walk on another mesh: `bench/upsample_garment.sh` takes a 32 × 11 one as the
+//! coarse mesh of a learned upsampling (issue 13).
 //!
 //! The pattern is the frustum unrolled: an annular sector with inner radius ρ₁ = r₁ s / (r₂ − r₁)
 //! (s the slant length) and angle Φ = 2π r₁ / ρ₁, so the sewn skirt is at rest in its initial
@@ -27,6 +31,13 @@ const HEM_Z: f64 = 0.55;
 const AROUND: usize = 64;
 const DOWN: usize = 22;
 
+/// The skirt's mesh: columns around and rows down.
+#[derive(Clone, Copy)]
+struct Grid {
+    around: usize,
+    down: usize,
+}
+
 /// Mannequin: hips capsule (radius, length, centre height), legs (radius, length, hip joint).
 const HIPS_R: f64 = 0.16;
 const HIPS_LEN: f64 = 0.45;
@@ -48,47 +59,68 @@ const END: f64 = STAND + 3.0 * PERIOD;
 const KEYS_PER_PERIOD: usize = 16;
 
 fn main() -> std::io::Result<()> {
-    let dir = std::env::args().nth(1).map(PathBuf::from).unwrap_or_else(|| PathBuf::from("scenes"));
+    let (dir, grid) = args().unwrap_or_else(|e| {
+        eprintln!("make_skirt: {e}");
+        std::process::exit(2)
+    });
     std::fs::create_dir_all(dir.join("meshes"))?;
-    std::fs::write(dir.join("meshes/skirt.obj"), skirt_obj())?;
-    std::fs::write(dir.join("skirt_mannequin.json"), scene_json())?;
+    std::fs::write(dir.join("meshes/skirt.obj"), skirt_obj(grid))?;
+    std::fs::write(dir.join("skirt_mannequin.json"), scene_json(grid))?;
     println!("wrote {} and {}", dir.join("meshes/skirt.obj").display(), dir.join("skirt_mannequin.json").display());
     Ok(())
 }
 
-/// Ring j (0 = waist) radius and height.
-fn ring(j: usize) -> (f64, f64) {
-    let s = j as f64 / DOWN as f64;
+/// `[OUT_DIR] [--around N] [--down N]`.
+fn args() -> Result<(PathBuf, Grid), String> {
+    let (mut dir, mut grid) = (PathBuf::from("scenes"), Grid { around: AROUND, down: DOWN });
+    let mut it = std::env::args().skip(1);
+    while let Some(a) = it.next() {
+        let count = |it: &mut dyn Iterator<Item = String>, min: usize| {
+            let v = it.next().ok_or(format!("{a}: expected a count"))?;
+            v.parse::<usize>().ok().filter(|&n| n >= min).ok_or(format!("{a}: expected a count ≥ {min}, got '{v}'"))
+        };
+        match a.as_str() {
+            "--around" => grid.around = count(&mut it, 3)?,
+            "--down" => grid.down = count(&mut it, 1)?,
+            _ if a.starts_with("--") => return Err(format!("unknown option {a}")),
+            _ => dir = PathBuf::from(a),
+        }
+    }
+    Ok((dir, grid))
+}
+
+/// Ring j (0 = waist) radius and height, of `down` rows.
+fn ring(j: usize, down: usize) -> (f64, f64) {
+    let s = j as f64 / down as f64;
     (WAIST_R + s * (HEM_R - WAIST_R), WAIST_Z + s * (HEM_Z - WAIST_Z))
 }
 
-fn skirt_obj() -> String {
+fn skirt_obj(Grid { around: n, down: m }: Grid) -> String {
     let slant = ((HEM_R - WAIST_R).powi(2) + (WAIST_Z - HEM_Z).powi(2)).sqrt();
     let rho1 = WAIST_R * slant / (HEM_R - WAIST_R);
     let sector = TAU * WAIST_R / rho1;
-    let mut out =
-        String::from("# A-line skirt (examples/make_skirt.rs): vertex j*64+i is ring j (0 = waist), column i\n");
-    for j in 0..=DOWN {
-        let (r, z) = ring(j);
-        for i in 0..AROUND {
+    let mut out = format!("# A-line skirt (examples/make_skirt.rs): vertex j*{n}+i is ring j (0 = waist), column i\n");
+    for j in 0..=m {
+        let (r, z) = ring(j, m);
+        for i in 0..n {
             // Column 0 is the seam, at the back (−x).
-            let theta = PI + TAU * i as f64 / AROUND as f64;
+            let theta = PI + TAU * i as f64 / n as f64;
             let _ = writeln!(out, "v {:.6} {:.6} {:.6}", r * theta.cos(), r * theta.sin(), z);
         }
     }
-    // Material coordinates: column i of ring j at radius ρ₁ + j·s/DOWN, angle i·Φ/AROUND
-    // (AROUND + 1 columns: the last is the seam's second side).
-    for j in 0..=DOWN {
-        let rho = rho1 + slant * j as f64 / DOWN as f64;
-        for i in 0..=AROUND {
-            let phi = sector * i as f64 / AROUND as f64;
+    // Material coordinates: column i of ring j at radius ρ₁ + j·s/m, angle i·Φ/n (n + 1
+    // columns: the last is the seam's second side).
+    for j in 0..=m {
+        let rho = rho1 + slant * j as f64 / m as f64;
+        for i in 0..=n {
+            let phi = sector * i as f64 / n as f64;
             let _ = writeln!(out, "vt {:.6} {:.6}", rho * phi.cos(), rho * phi.sin());
         }
     }
-    let v = |i: usize, j: usize| j * AROUND + i % AROUND + 1;
-    let vt = |i: usize, j: usize| j * (AROUND + 1) + i + 1;
-    for j in 0..DOWN {
-        for i in 0..AROUND {
+    let v = |i: usize, j: usize| j * n + i % n + 1;
+    let vt = |i: usize, j: usize| j * (n + 1) + i + 1;
+    for j in 0..m {
+        for i in 0..n {
             let c = [(i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)];
             // Alternate diagonals, as the generated rectangles do.
             let tris = if (i + j) % 2 == 0 { [[0, 1, 2], [0, 2, 3]] } else { [[0, 1, 3], [1, 2, 3]] };
@@ -169,8 +201,8 @@ fn keys(motion: impl Fn(f64) -> (Vector3<f64>, UnitQuaternion<f64>)) -> String {
     lines.join(",\n")
 }
 
-fn scene_json() -> String {
-    let waist: Vec<String> = (0..AROUND).map(|i| i.to_string()).collect();
+fn scene_json(grid: Grid) -> String {
+    let waist: Vec<String> = (0..grid.around).map(|i| i.to_string()).collect();
     let leg_obstacle = |name: &str, side: f64| {
         format!(
             "    {{\n      \"name\": \"{name}\",\n      \"capsule\": {{ \"radius\": {LEG_R}, \"length\": {LEG_LEN} }},\n      \"transform\": {{ \"translate\": [0, {:.3}, {:.3}] }},\n      \"motion\": [\n{}\n      ]\n    }}",

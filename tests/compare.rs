@@ -3,12 +3,14 @@
 //! per-frame errors and a verdict per measure that follows from the band; a run identical to the
 //! reference measures exactly zero in every measure and frame while the perturbed floors do not;
 //! the view mode, whose camera sees half the sheet, uses fewer faces than adaptive; without a
-//! camera the command is refused in one line.
+//! camera the command is refused in one line. With `--upsample`, the derived runs' stats.json
+//! carry their frames' strain and no energies, and `upsample trace` writes `simulate`'s
+//! stats.json for both its runs.
 
 use std::path::{Path, PathBuf};
 
 mod common;
-use common::{temp_dir, viewcloth};
+use common::{check_stats_strain, temp_dir, viewcloth};
 
 use serde_json::Value;
 
@@ -217,6 +219,15 @@ fn compare_measures_upsampled_and_loop_runs_beside_the_modes() {
         let o = viewcloth(&args);
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     }
+    // `trace` writes `simulate`'s stats.json for both runs: initial state and 12 frames.
+    for (run, mode) in [("coarse", "uniform"), ("fine", "tracked")] {
+        // Cotton on a 1 m sheet hanging from two corners: a few % at most.
+        let stats = check_stats_strain(&pair.join(run), 13, (0.1, 0.02));
+        assert_eq!(stats["mode"], mode);
+        let last = &stats["frames"][12];
+        assert!(last["total_energy"].as_f64().is_some() && last["steps"] == 4, "{run}: {last}");
+        assert_eq!(last["stage_s"]["tracking"].is_number(), run == "fine", "{run}: {last}");
+    }
     let out = dir.join("out");
     let base = ["compare", &s(&shot(&dir)), "--modes", "adaptive", "--no-floor", "--size", "160x90", "--quiet"];
     let r = compare(&[&base[..], &["--out", &s(&out), "--upsample", &s(&model), "--coarse", &s(&coarse)]].concat());
@@ -233,6 +244,16 @@ fn compare_measures_upsampled_and_loop_runs_beside_the_modes() {
         assert!(err(m, "geometric", "mean") > 0.0 && err(m, "geometric", "mean") < 0.1, "{}", m["name"]);
     }
     assert!(std::fs::read_to_string(out.join("compare.md")).unwrap().contains("| upsampled |"));
+    // The derived runs' stats: the strain of their own frames against the material coordinates
+    // they carry; no energies (no velocities). Loop moves points along the surface away from
+    // their (linearly subdivided) material coordinates, at the irregular nodes of this 3 × 3 mesh
+    // by tens of % (0.53 max at frame 0; README, `compare`), so its bound is loose.
+    for (run, bound) in [("upsampled", (0.15, 0.05)), ("loop", (1.0, 0.3))] {
+        let stats = check_stats_strain(&out.join(run), 13, bound);
+        for f in stats["frames"].as_array().unwrap() {
+            assert!(f.get("kinetic_energy").is_none() && f.get("total_energy").is_none(), "{run}: {f}");
+        }
+    }
     // The model applied to a run on another coarse mesh.
     let other = uniform_shot(&dir, 4);
     let bad = dir.join("bad");

@@ -83,7 +83,7 @@ fn record(scene_file: &str, frame: usize) -> Record {
         positions_hash: format!("{hash:016x}"),
         size: (hi - lo).norm(),
         samples,
-        total_energy: stats.total_energy,
+        total_energy: stats.total_energy.expect("a simulated frame has its energy"),
     }
 }
 

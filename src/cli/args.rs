@@ -339,21 +339,42 @@ pub struct UpsampleTrainArgs {
     /// Harmonics kept (default: all, one per fine node).
     #[arg(long, value_name = "K")]
     pub modes: Option<usize>,
-    /// Damping of the lowest harmonic, γ_1 (paper §6: 1).
-    #[arg(long, default_value_t = 1.0)]
-    pub gamma1: f64,
-    /// Damping of the highest harmonic, γ_N (paper §6: 1e5).
-    #[arg(long = "gammaN", alias = "gamma-n", default_value_t = 1e5)]
-    pub gamma_n: f64,
-    /// Exponent of the damping profile γ_n = a(1 + b(n−1)/N)^c (paper §6: 4).
-    #[arg(long, default_value_t = 4.0)]
-    pub c: f64,
+    /// Damping of the lowest harmonic, γ_1 (paper §6: 1). With --cross-validate, a
+    /// comma-separated list to choose from (default 0.001,0.01,0.1,1,10).
+    #[arg(long, value_delimiter = ',', num_args = 1..)]
+    pub gamma1: Option<Vec<f64>>,
+    /// Damping of the highest harmonic, γ_N (paper §6: 1e5). With --cross-validate, a list
+    /// (default 1,10,100,1000,1e5).
+    #[arg(long = "gammaN", alias = "gamma-n", value_delimiter = ',', num_args = 1..)]
+    pub gamma_n: Option<Vec<f64>>,
+    /// Exponent of the damping profile γ_n = a(1 + b(n−1)/N)^c (paper §6: 4). With
+    /// --cross-validate, a list (default 1,2,4,8).
+    #[arg(long, value_delimiter = ',', num_args = 1..)]
+    pub c: Option<Vec<f64>>,
+    /// What the regulariser damps U towards: `zero` (the paper's eq. 5) or `barycentric` (the
+    /// embedding of the fine mesh in the coarse one, i.e. the coarse surface). With
+    /// --cross-validate, a list (default both).
+    #[arg(long, value_enum, value_delimiter = ',', num_args = 1..)]
+    pub prior: Option<Vec<PriorArg>>,
+    /// Choose the prior, γ_1, γ_N and c from the grid of the listed values by k-fold cross-validation over
+    /// contiguous blocks of the training frames (the fine run's other frames are not looked at).
+    #[arg(long)]
+    pub cross_validate: bool,
+    /// Cross-validation folds (blocks of frames).
+    #[arg(long, default_value_t = 5, requires = "cross_validate")]
+    pub folds: usize,
     /// Oscillatory mode pairs fitted to the residual travelling waves (paper §5; 0: none).
     #[arg(long, value_name = "K", default_value_t = 0)]
     pub oscillatory: usize,
     /// The model file to write.
     #[arg(long)]
     pub out: PathBuf,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum PriorArg {
+    Zero,
+    Barycentric,
 }
 
 #[derive(clap::Args)]
@@ -397,7 +418,10 @@ pub struct UpsampleTraceArgs {
     /// Harmonic test functions T (paper: 50–80).
     #[arg(long = "test-functions", value_name = "T", default_value_t = 60)]
     pub test_functions: usize,
-    /// Writes DIR/coarse/ and DIR/fine/ (frame_NNNN.obj), the training pair.
+    /// Writes DIR/coarse/ and DIR/fine/ (frame_NNNN.obj and stats.json), the training pair.
     #[arg(long, value_name = "DIR")]
     pub out: PathBuf,
+    /// Worker threads (default: all cores). Results are identical for any count.
+    #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
+    pub threads: Option<u64>,
 }

@@ -503,6 +503,67 @@ pub fn convert(conf: &Path, out: &Path, base: Option<&Path>) -> Result<(), CliEr
     Ok(())
 }
 
+/// The damping profiles `upsample train` is to use: the one given (paper defaults for what is
+/// not), or with --cross-validate the grid of the listed values (defaults for lists not given).
+fn profile_grid(
+    a: &crate::cli::args::UpsampleTrainArgs,
+) -> Result<Vec<crate::upsample::validate::Candidate>, CliError> {
+    use crate::cli::args::PriorArg;
+    use crate::upsample::{validate::grid, Prior};
+    let several =
+        |name: &str, n: usize| CliError::Input(format!("{name}: {n} values given; several need --cross-validate"));
+    let lists = [
+        ("--gamma1", &a.gamma1, [1.0].as_slice(), [1e-3, 1e-2, 0.1, 1.0, 10.0].as_slice()),
+        ("--gammaN", &a.gamma_n, &[1e5], &[1.0, 10.0, 100.0, 1e3, 1e5]),
+        ("--c", &a.c, &[4.0], &[1.0, 2.0, 4.0, 8.0]),
+    ];
+    let mut chosen = Vec::new();
+    for (name, given, paper, searched) in lists {
+        chosen.push(match (given, a.cross_validate) {
+            (Some(v), false) if v.len() > 1 => return Err(several(name, v.len())),
+            (Some(v), _) => v.clone(),
+            (None, false) => paper.to_vec(),
+            (None, true) => searched.to_vec(),
+        });
+    }
+    let priors: Vec<Prior> = match (&a.prior, a.cross_validate) {
+        (Some(v), false) if v.len() > 1 => return Err(several("--prior", v.len())),
+        (Some(v), _) => v.iter().map(|p| if *p == PriorArg::Zero { Prior::Zero } else { Prior::Barycentric }).collect(),
+        (None, false) => vec![Prior::Zero],
+        (None, true) => vec![Prior::Zero, Prior::Barycentric],
+    };
+    let g = grid(&priors, &chosen[0], &chosen[1], &chosen[2]);
+    if g.is_empty() {
+        return Err(CliError::Input("--gamma1, --gammaN: no pair with gamma1 <= gammaN to try".into()));
+    }
+    Ok(g)
+}
+
+/// The cross-validation table, best first (nothing when there was one candidate).
+fn print_validation(scores: &[crate::upsample::validate::Scored], folds: usize) {
+    if scores.is_empty() {
+        return;
+    }
+    let mut sorted: Vec<_> = scores.iter().collect();
+    sorted.sort_by(|a, b| a.rms.total_cmp(&b.rms));
+    println!("{folds}-fold cross-validation over blocks of training frames, RMS node distance (mm), best first:");
+    println!("| prior | γ_1 | γ_N | c | all folds | per fold |");
+    println!("|---|---|---|---|---|---|");
+    for s in sorted {
+        let folds: Vec<String> = s.per_fold.iter().map(|e| format!("{:.3}", 1e3 * e)).collect();
+        let c = s.candidate;
+        let prior = prior_name(c.prior);
+        println!("| {prior} | {} | {} | {} | {:.3} | {} |", c.gamma1, c.gamma_n, c.c, 1e3 * s.rms, folds.join(" "));
+    }
+}
+
+fn prior_name(p: crate::upsample::Prior) -> &'static str {
+    match p {
+        crate::upsample::Prior::Zero => "zero",
+        crate::upsample::Prior::Barycentric => "barycentric",
+    }
+}
+
 /// `upsample train`, `upsample apply` and `upsample loop`.
 pub fn upsample(cmd: UpsampleCommand) -> Result<(), CliError> {
     use crate::upsample::run::{apply, coarse_faces, subdivide, train, RunError, TrainOptions};
@@ -515,27 +576,38 @@ pub fn upsample(cmd: UpsampleCommand) -> Result<(), CliError> {
         UpsampleCommand::Train(a) => {
             let opts = TrainOptions {
                 modes: a.modes,
-                gamma1: a.gamma1,
-                gamma_n: a.gamma_n,
-                c: a.c,
+                profiles: profile_grid(&a)?,
+                folds: a.folds,
                 oscillatory: a.oscillatory,
             };
             let start = std::time::Instant::now();
             let (model, r) = train(&a.coarse, &a.fine, &opts).map_err(cli_error)?;
             crate::io::write_atomic(&a.out, &model.to_bytes())
                 .map_err(|e| CliError::Run(format!("{}: {e}", a.out.display())))?;
+            print_validation(&r.validation, a.folds);
+            if !r.validation.is_empty() {
+                println!(
+                    "barycentric embedding B p_c (the coarse surface; U's limit for large γ with --prior barycentric): {:.3} mm over all training frames",
+                    1e3 * r.barycentric_rms
+                );
+            }
             let periods: Vec<String> =
                 r.oscillatory.iter().map(|t| format!("{:.2}", 2.0 * std::f64::consts::PI / t)).collect();
             let osc = match periods.is_empty() {
                 true => String::new(),
                 false => format!(", oscillatory pairs of period {} frames", periods.join(", ")),
             };
+            let p = r.profile;
             println!(
-                "trained on {} frames: {} coarse → {} fine nodes, {} harmonics{osc}, {:.1} s → {}",
+                "trained on {} frames: {} coarse → {} fine nodes, {} harmonics, prior {}, γ_1 {} γ_N {} c {}{osc}, {:.1} s → {}",
                 r.frames,
                 r.coarse_nodes,
                 r.fine_nodes,
                 r.modes,
+                prior_name(p.prior),
+                p.gamma1,
+                p.gamma_n,
+                p.c,
                 start.elapsed().as_secs_f64(),
                 a.out.display()
             );
@@ -570,6 +642,7 @@ pub fn upsample(cmd: UpsampleCommand) -> Result<(), CliError> {
                 Ok(loaded.scene)
             };
             let (coarse, fine) = (load(&a.coarse)?, load(&a.fine)?);
+            set_threads(a.threads)?;
             let r = crate::upsample::track::trace(coarse, fine, a.test_functions, &a.out).map_err(cli_error)?;
             let worst = r.residual_after.iter().copied().fold(0.0, f64::max);
             let pull = r.residual_before.iter().copied().fold(0.0, f64::max);

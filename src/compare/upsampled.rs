@@ -3,13 +3,17 @@
 //! Loop subdivision to about the model's fine face count (`loop`, the paper's baseline, Fig. 1b).
 //! Each derived run's time is the coarse run's plus its own (reading, multiplying and writing
 //! the frames), and its `stats.json` says so, so the derived runs are measured like any other.
+//! Their frame stats carry the strain of the derived frames (from their positions and the
+//! material coordinates they carry) and no energies: a derived frame has no velocities.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use super::{finished_run, read_stats, run_report, CompareOptions, RunReport};
 use crate::error::InputError;
+use crate::io::obj::{read_obj, uv_unit, ClothOut};
 use crate::io::stats::{FrameStats, RunStats};
+use crate::metrics::obj_strain;
 use crate::scene::{RemeshMode, Scene};
 use crate::sim::progress::Progress;
 use crate::sim::{run_shot, RunError, RunOptions};
@@ -31,6 +35,9 @@ pub fn runs(up: &UpsampleOptions, opts: &CompareOptions) -> Result<Vec<RunReport
     let model = Model::from_bytes(&bytes, "--upsample").map_err(|e| input(&up.model, e.to_string()))?;
     let coarse = coarse_run(up, opts)?;
     let stats = read_stats(&coarse.dir)?;
+    // Both derived meshes carry the coarse cloth's texture coordinates (U's fine mesh was
+    // embedded in its material space), in its units.
+    let unit = uv_unit(&ClothOut::of(&up.coarse), 0);
     // `f` writes the derived frames into its folder and returns their node count.
     let derive = |name: &str, faces: usize, f: &dyn Fn(&Path) -> Result<usize, UpsampleRunError>| {
         let dir = opts.out_dir.join(name);
@@ -42,7 +49,8 @@ pub fn runs(up: &UpsampleOptions, opts: &CompareOptions) -> Result<Vec<RunReport
             UpsampleRunError::Input(m) => input(&up.model, m),
             UpsampleRunError::Output(m) => RunError::Output(m),
         })?;
-        let derived = derived_stats(&stats, name, clock.elapsed().as_secs_f64(), nodes, faces);
+        let extra_s = clock.elapsed().as_secs_f64();
+        let derived = derived_stats(&stats, name, extra_s, nodes, faces, &dir, unit)?;
         write_stats(&dir, &derived)?;
         Ok::<_, RunError>(run_report(name, dir, &derived))
     };
@@ -74,29 +82,43 @@ fn coarse_run(up: &UpsampleOptions, opts: &CompareOptions) -> Result<RunReport, 
     Ok(run_report("coarse", dir, &stats))
 }
 
-/// The coarse run's stats with the derived run's mesh and its extra time spread over the frames.
-fn derived_stats(coarse: &RunStats, name: &str, extra_s: f64, nodes: usize, faces: usize) -> RunStats {
+/// The coarse run's stats with the derived run's mesh, the strain of its frames in `dir` (their
+/// texture coordinates in units of `unit` metres) and its extra time spread over the frames;
+/// no energies (`FrameStats::kinetic_energy`).
+fn derived_stats(
+    coarse: &RunStats,
+    name: &str,
+    extra_s: f64,
+    nodes: usize,
+    faces: usize,
+    dir: &Path,
+    unit: f64,
+) -> Result<RunStats, RunError> {
     let per_frame = extra_s / coarse.frames.len().max(1) as f64;
-    let frames = coarse
-        .frames
-        .iter()
-        .map(|f| FrameStats {
+    let mut frames = Vec::with_capacity(coarse.frames.len());
+    for f in &coarse.frames {
+        let path = dir.join(format!("frame_{:04}.obj", f.frame));
+        let strain = read_obj(&path).and_then(|obj| obj_strain(&obj, unit));
+        let strain = strain.map_err(|e| RunError::Output(format!("{}: {e}", path.display())))?;
+        frames.push(FrameStats {
             frame: f.frame,
             time: f.time,
             wall_s: f.wall_s + per_frame,
             nodes,
             faces,
+            max_strain: strain.max,
+            mean_strain: strain.mean,
             ..Default::default()
-        })
-        .collect();
-    RunStats {
+        });
+    }
+    Ok(RunStats {
         scene: coarse.scene.clone(),
         mode: name.into(),
         stages: vec!["coarse run".into(), name.into()],
         total_wall_s: coarse.total_wall_s + extra_s,
         frames,
         ..Default::default()
-    }
+    })
 }
 
 fn write_stats(dir: &Path, stats: &RunStats) -> Result<(), RunError> {

@@ -12,9 +12,15 @@ pub struct FrameStats {
     pub stage_s: BTreeMap<String, f64>,
     pub nodes: usize,
     pub faces: usize,
-    pub kinetic_energy: f64,
-    /// Total energy: kinetic + elastic + gravitational potential (J).
-    pub total_energy: f64,
+    /// Kinetic energy (J). Absent for a run derived from another's frames (`compare`'s
+    /// `upsampled` and `loop`): it has no velocities, and no material to weigh them with.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kinetic_energy: Option<f64>,
+    /// Total energy: kinetic + elastic + gravitational potential (J); absent as `kinetic_energy`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub total_energy: Option<f64>,
+    /// Largest principal stretch − 1 over the faces, and its material-area-weighted mean
+    /// (`metrics::strain`; a derived run's from its frames and their material coordinates).
     pub max_strain: f64,
     pub mean_strain: f64,
     /// Steps taken (more than the scene's steps per frame when steps were retried).

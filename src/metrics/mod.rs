@@ -6,6 +6,7 @@
 //! - `visible`: what the audience sees, obstacles rasterised with the cloth: mean normal-angle
 //!   difference (shading and flat normals), silhouette mismatch (XOR / union of cloth pixels)
 //!   and depth error relative to the scene depth;
+//! - `strain`: the principal membrane strain `stats.json` reports, also of OBJ frames;
 //! - `geometric`: two-sided distance between the densely sampled surfaces (mean, RMS, 95th
 //!   percentile, max), over all cloth or weighted by each triangle's visible pixel fraction.
 //!
@@ -14,10 +15,12 @@
 
 pub mod geometric;
 pub mod raster;
+pub mod strain;
 pub mod visible;
 
 pub use geometric::{surface_distance, Surface, SurfaceDistance};
 pub use raster::{coverage, rasterize, shading_normals, vertex_normals, Image};
+pub use strain::{obj_strain, principal_strain, Strain};
 pub use visible::{visible_error, FrameImage, VisibleError};
 
 /// Test meshes: an `nx` × `nz` grid of 2 nx nz triangles whose node (i, j) is

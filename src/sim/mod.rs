@@ -27,10 +27,10 @@ pub use workspace::Workspace;
 use crate::collision::crossings::{find_crossings, Crossings, Soup};
 use crate::collision::world::CollisionWorld;
 use crate::error::InputError;
-use crate::forces::membrane::{deformation_gradient, max_principal_strain};
 use crate::io::stats::FrameStats;
 use crate::math::Real;
 use crate::mesh::Mesh;
+use crate::metrics::principal_strain;
 use crate::scene::{RemeshMode, Scene};
 use crate::solver::SolveError;
 use checks::Elastic;
@@ -174,24 +174,17 @@ impl Simulation {
         let m = &self.state.mesh;
         let kinetic: Real = m.nodes.iter().map(|n| 0.5 * n.mass * n.v.norm_squared()).sum();
         let potential: Real = m.nodes.iter().map(|n| -n.mass * self.scene.gravity.dot(&n.x)).sum();
-        let (mut max_strain, mut sum, mut area) = (Real::NEG_INFINITY, 0.0, 0.0);
-        for f in 0..m.faces.len() {
-            let x = m.face_nodes(f).map(|n| m.nodes[n].x);
-            let r = &self.ws.rest.membrane[f];
-            let s = max_principal_strain(&deformation_gradient(&x, r));
-            max_strain = max_strain.max(s);
-            sum += s * r.area;
-            area += r.area;
-        }
+        let faces = (0..m.faces.len()).map(|f| (m.face_nodes(f).map(|n| m.nodes[n].x), self.ws.rest.membrane[f]));
+        let strain = principal_strain(faces);
         FrameStats {
             frame,
             time: self.state.time,
             nodes: m.nodes.len(),
             faces: m.faces.len(),
-            kinetic_energy: kinetic,
-            total_energy: kinetic + potential + self.elastic_energy(),
-            max_strain,
-            mean_strain: sum / area,
+            kinetic_energy: Some(kinetic),
+            total_energy: Some(kinetic + potential + self.elastic_energy()),
+            max_strain: strain.max,
+            mean_strain: strain.mean,
             ..Default::default()
         }
     }

@@ -107,10 +107,7 @@ impl Output<'_> {
     }
 
     fn write_stats(&self, stats: &RunStats) -> Result<(), RunError> {
-        let path = self.dir.join("stats.json");
-        let json =
-            serde_json::to_vec_pretty(stats).map_err(|e| RunError::Io { path: path.clone(), source: e.into() })?;
-        write_atomic(&path, &json).map_err(io_err(&path))
+        write_stats(self.dir, stats)
     }
 
     /// Writes the checkpoint of frame `k` when due (every `every` frames and at the last) or
@@ -170,21 +167,9 @@ impl Output<'_> {
             if let Some(n) = number {
                 self.write_frame(sim, n)?;
             }
-            let mut fs = self.frame_stats(sim, number.unwrap_or(0));
+            let mut fs = frame_stats(sim, number.unwrap_or(0), self.adaptive);
             fs.wall_s = clock.elapsed().as_secs_f64();
-            stats.retries += fs.retries;
-            if k > 0 && (stats.min_step == 0.0 || fs.min_step < stats.min_step) {
-                stats.min_step = fs.min_step;
-            }
-            // A preroll frame's counters are counted in the run's totals, not listed.
-            if number.is_some() {
-                stats.frames.push(fs);
-            }
-            for stage in sim.ws.timers.ran() {
-                if !stats.stages.iter().any(|s| s == stage) {
-                    stats.stages.push(stage.to_string());
-                }
-            }
+            record(&mut stats, fs, k, number.is_some(), sim.ws.timers.ran());
             stats.total_wall_s = wall_before + started.elapsed().as_secs_f64();
             self.write_stats(&stats)?;
             self.checkpoint(sim, &stats, k, last, false)?;
@@ -197,46 +182,6 @@ impl Output<'_> {
         report.finish();
         self.write_usd(sim, last)?;
         Ok(stats)
-    }
-
-    /// The measurements and counters of the frame just simulated, as frame `number`.
-    fn frame_stats(&self, sim: &mut Simulation, number: usize) -> FrameStats {
-        let mut fs = sim.measure(number);
-        if self.adaptive {
-            let r = std::mem::take(&mut sim.ws.remesh_stats);
-            fs.remesh = Some(RemeshFrameStats { splits: r.splits, flips: r.flips, collapses: r.collapses });
-        }
-        if sim.ws.collisions.is_some() {
-            let clock = Instant::now();
-            let c = std::mem::take(&mut sim.ws.counters);
-            fs.collision = Some(CollisionFrameStats {
-                contacts: c.contacts,
-                impacts: c.impacts,
-                impact_zones: c.impact_zones,
-                ccd_iterations: c.ccd_iterations,
-                ccd_cap_hits: c.cap_hits,
-                failed_zones: c.failed_zones,
-                penetrations: sim.penetrations(),
-                sticking: c.sticking,
-                sliding: c.sliding,
-                friction_resolves: c.friction_resolves,
-                friction_refactors: c.friction_refactors,
-                friction_unconverged: c.friction_unconverged,
-            });
-            sim.ws.timers.since(Stage::PenetrationCheck, clock);
-        }
-        let check = Instant::now();
-        let crossings = sim.crossings();
-        (fs.crossings_self, fs.crossings_obstacle) = (crossings.cloth.len(), crossings.obstacle.len());
-        sim.ws.timers.since(Stage::CrossingCheck, check);
-        sim.constraint_stats(&mut fs);
-        let faults = std::mem::take(&mut sim.ws.faults);
-        fs.steps = faults.steps;
-        fs.retries = faults.retries;
-        fs.min_step = faults.min_step;
-        fs.faults = faults.kinds;
-        fs.stage_s = sim.ws.timers.take();
-        fs
     }
 
     /// Stops the run after frame `k` (a signal): its checkpoint, then stats.json saying so,
@@ -258,6 +203,118 @@ impl Output<'_> {
         self.write_stats(&stats)?;
         self.write_usd(sim, k)?;
         Err(RunError::Interrupted { dir: self.dir.to_path_buf(), at, checkpoint })
+    }
+}
+
+/// The measurements and counters of the frame just simulated, as frame `number`.
+fn frame_stats(sim: &mut Simulation, number: usize, adaptive: bool) -> FrameStats {
+    let mut fs = sim.measure(number);
+    if adaptive {
+        let r = std::mem::take(&mut sim.ws.remesh_stats);
+        fs.remesh = Some(RemeshFrameStats { splits: r.splits, flips: r.flips, collapses: r.collapses });
+    }
+    if sim.ws.collisions.is_some() {
+        let clock = Instant::now();
+        let c = std::mem::take(&mut sim.ws.counters);
+        fs.collision = Some(CollisionFrameStats {
+            contacts: c.contacts,
+            impacts: c.impacts,
+            impact_zones: c.impact_zones,
+            ccd_iterations: c.ccd_iterations,
+            ccd_cap_hits: c.cap_hits,
+            failed_zones: c.failed_zones,
+            penetrations: sim.penetrations(),
+            sticking: c.sticking,
+            sliding: c.sliding,
+            friction_resolves: c.friction_resolves,
+            friction_refactors: c.friction_refactors,
+            friction_unconverged: c.friction_unconverged,
+        });
+        sim.ws.timers.since(Stage::PenetrationCheck, clock);
+    }
+    let check = Instant::now();
+    let crossings = sim.crossings();
+    (fs.crossings_self, fs.crossings_obstacle) = (crossings.cloth.len(), crossings.obstacle.len());
+    sim.ws.timers.since(Stage::CrossingCheck, check);
+    sim.constraint_stats(&mut fs);
+    let faults = std::mem::take(&mut sim.ws.faults);
+    fs.steps = faults.steps;
+    fs.retries = faults.retries;
+    fs.min_step = faults.min_step;
+    fs.faults = faults.kinds;
+    fs.stage_s = sim.ws.timers.take();
+    fs
+}
+
+/// Adds frame `k`'s stats to the run's: its retries and smallest step to the totals (preroll
+/// frames included), the stages that `ran` so far, and the frame itself when it is `listed`
+/// (written; a preroll frame is not).
+fn record<'a>(stats: &mut RunStats, fs: FrameStats, k: usize, listed: bool, ran: impl Iterator<Item = &'a str>) {
+    stats.retries += fs.retries;
+    if k > 0 && (stats.min_step == 0.0 || fs.min_step < stats.min_step) {
+        stats.min_step = fs.min_step;
+    }
+    if listed {
+        stats.frames.push(fs);
+    }
+    for stage in ran {
+        if !stats.stages.iter().any(|s| s == stage) {
+            stats.stages.push(stage.to_string());
+        }
+    }
+}
+
+/// Writes `dir/stats.json` (atomically: it is valid at any instant).
+fn write_stats(dir: &Path, stats: &RunStats) -> Result<(), RunError> {
+    let path = dir.join("stats.json");
+    let json = serde_json::to_vec_pretty(stats).map_err(|e| RunError::Io { path: path.clone(), source: e.into() })?;
+    write_atomic(&path, &json).map_err(io_err(&path))
+}
+
+/// `stats.json` of a run whose frames its caller steps (`upsample trace` steps two in lockstep):
+/// the frame stats, totals and file `simulate` writes (`Output::frames`), rewritten per frame.
+/// Its `total_wall_s` is the sum of its frames' wall times (the caller's other work apart).
+pub struct StatsLog {
+    dir: PathBuf,
+    stats: RunStats,
+    adaptive: bool,
+}
+
+impl StatsLog {
+    /// The log of `sim`'s run into `dir`, as `mode` (`simulate` says `uniform`, `adaptive` or
+    /// `view`).
+    pub fn new(dir: &Path, sim: &Simulation, mode: &str) -> StatsLog {
+        let stats = RunStats { scene: sim.scene.name.clone(), mode: mode.into(), ..Default::default() };
+        StatsLog { dir: dir.to_path_buf(), stats, adaptive: super::run::is_adaptive(&sim.scene) }
+    }
+
+    /// Records frame `k` of the run (counted from its start, preroll included), which took
+    /// `wall_s` of its own (measuring it is added, as `simulate`'s frames include it), plus the
+    /// caller's `extra` stages (name, seconds), and rewrites stats.json.
+    pub fn frame(
+        &mut self,
+        sim: &mut Simulation,
+        k: usize,
+        wall_s: f64,
+        extra: &[(&str, f64)],
+    ) -> Result<(), RunError> {
+        let (number, clock) = (sim.scene.frame_number(k), Instant::now());
+        let mut fs = frame_stats(sim, number.unwrap_or(0), self.adaptive);
+        fs.wall_s = wall_s + clock.elapsed().as_secs_f64();
+        self.stats.total_wall_s += fs.wall_s;
+        for &(stage, t) in extra {
+            *fs.stage_s.entry(stage.to_string()).or_insert(0.0) += t;
+        }
+        let mut ran: Vec<&str> = sim.ws.timers.ran().collect();
+        ran.extend(extra.iter().map(|e| e.0));
+        record(&mut self.stats, fs, k, number.is_some(), ran.into_iter());
+        write_stats(&self.dir, &self.stats)
+    }
+
+    /// Ends the log with why the run stopped (as `simulate` does when a frame fails).
+    pub fn fail(&mut self, why: String) -> Result<(), RunError> {
+        self.stats.error = Some(why);
+        write_stats(&self.dir, &self.stats)
     }
 }
 

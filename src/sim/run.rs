@@ -336,7 +336,7 @@ fn is_run_file(path: &Path) -> bool {
         || numbered("checkpoint_", ".bin")
 }
 
-fn is_adaptive(scene: &Scene) -> bool {
+pub(super) fn is_adaptive(scene: &Scene) -> bool {
     scene.cloths.iter().any(|c| c.remesh.as_ref().is_some_and(|r| r.mode.is_adaptive()))
 }
 

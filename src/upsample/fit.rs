@@ -14,10 +14,18 @@
 //!
 //! Each row's KKT system (S + γ_n² I) û + μ 1 = P_c y_nᵀ, 1ᵀ û = s_n shares S = P_c P_cᵀ; one
 //! eigendecomposition S = W Σ Wᵀ makes every row O(M²) (the rows are independent, §3.2).
+//!
+//! `Prior::Barycentric` (ours, not the paper's) damps U towards the barycentric embedding B
+//! instead of towards zero: γ_n² ‖û − b̂_n‖² with b̂ = Φᵀ V B, so the right-hand side gains
+//! γ_n² b̂_nᵀ. As b̂_n · 1 = s_n (B's rows sum to one), the constraint is unchanged, and as γ
+//! grows U tends to B — the coarse surface itself — rather than to every row averaging the
+//! coarse nodes (what zero is, under the constraint). With few training motions the data
+//! cannot pin the low modes of U down, and shrinking them to zero costs more than it saves
+//! (`tests/upsample_loop.rs` measures both; cross-validation chooses, `validate`).
 
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 
-use super::{Harmonics, Operator, Profile, UpsampleError};
+use super::{Embedding, Harmonics, Operator, Profile, UpsampleError};
 use crate::math::{Real, Vec3};
 
 /// Aligned training frames (§3.1): coarse node positions and fine node positions per frame.
@@ -27,34 +35,127 @@ pub struct TrainingSet {
     pub fine: Vec<Vec<Vec3>>,
 }
 
-/// Learns U from `data` with the harmonics `h` of the fine mesh and the damping `profile`.
+/// What the regulariser damps U towards (module doc).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Prior {
+    /// The paper's eq. 5: ‖Γ Qᵀ U‖².
+    Zero,
+    /// ‖Γ Qᵀ (U − B)‖², B the barycentric embedding of the fine nodes in the coarse mesh.
+    Barycentric,
+}
+
+/// Learns U from `data` with the harmonics `h` of the fine mesh and the damping `profile`
+/// (eq. 5, damped towards zero).
 pub fn fit(h: &Harmonics, profile: &Profile, data: &TrainingSet) -> Result<Operator, UpsampleError> {
-    let m = data.coarse.first().ok_or(UpsampleError::NoFrames)?.len();
-    let pc = stack(&data.coarse, m, "coarse")?;
-    let pf = stack(&data.fine, h.modes.nrows(), "fine")?;
-    if pc.ncols() != pf.ncols() {
-        let what = format!("{} coarse frames but {} fine", data.coarse.len(), data.fine.len());
-        return Err(UpsampleError::BadFrame { frame: data.coarse.len().min(data.fine.len()), what });
-    }
-    // Φᵀ V, the mass-weighted projection onto the harmonics (K × N, kept transposed).
-    let vphi = DMatrix::from_fn(h.modes.nrows(), h.modes.ncols(), |i, n| h.mass[i] * h.modes[(i, n)]);
-    let s = vphi.row_sum().transpose(); // Φᵀ V 1_N
-    let r = &pc * (pf.transpose() * &vphi); // column n: P_c y_nᵀ (M × K)
-    let eig = SymmetricEigen::new(&pc * pc.transpose());
-    let w = &eig.eigenvectors;
-    let rt = w.transpose() * r;
-    let et = w.transpose() * DVector::from_element(m, 1.0);
-    let mut ut = DMatrix::zeros(m, h.modes.ncols());
-    for n in 0..h.modes.ncols() {
-        let col = row_in_eigenbasis(&eig.eigenvalues, &rt.column(n).into_owned(), &et, s[n], profile.gamma(n + 1));
-        ut.set_column(n, &col);
-    }
-    // U = Φ Û with Ûᵀ = W Ũ.
-    let u = &h.modes * (w * ut).transpose();
+    fit_towards(h, profile, data, None)
+}
+
+/// As `fit`, damped towards the embedding `prior` when given (`Prior::Barycentric`).
+pub fn fit_towards(
+    h: &Harmonics,
+    profile: &Profile,
+    data: &TrainingSet,
+    prior: Option<&Embedding>,
+) -> Result<Operator, UpsampleError> {
+    let (pc, pf) = data.stacked(h.modes.nrows())?;
+    let normal = NormalEquations::new(h, &pc, &pf, prior);
+    // U = Φ Û.
+    let u = &h.modes * normal.coefficients(profile, prior.is_some());
     if u.iter().any(|v| !v.is_finite()) {
         return Err(UpsampleError::NonFinite { what: "the fitted operator" });
     }
     Ok(Operator::new(u))
+}
+
+impl TrainingSet {
+    /// P_c (M × 3F) and P_f (N × 3F), checked: equal frame counts, `fine_nodes` fine nodes,
+    /// one coarse node count, finite coordinates.
+    pub fn stacked(&self, fine_nodes: usize) -> Result<(DMatrix<Real>, DMatrix<Real>), UpsampleError> {
+        let m = self.coarse.first().ok_or(UpsampleError::NoFrames)?.len();
+        let pc = stack(&self.coarse, m, "coarse")?;
+        let pf = stack(&self.fine, fine_nodes, "fine")?;
+        if pc.ncols() != pf.ncols() {
+            let what = format!("{} coarse frames but {} fine", self.coarse.len(), self.fine.len());
+            return Err(UpsampleError::BadFrame { frame: self.coarse.len().min(self.fine.len()), what });
+        }
+        Ok((pc, pf))
+    }
+}
+
+/// What eq. 5 needs from one training set, shared by every damping profile (module doc):
+/// S = P_c P_cᵀ = W Σ Wᵀ, and, in that eigenbasis, r̃_n = Wᵀ P_c y_nᵀ and ẽ = Wᵀ 1_M.
+pub struct NormalEquations {
+    /// b̃_n = Wᵀ b̂_nᵀ (M × K), the barycentric prior in S's eigenbasis, when one was given.
+    prior: Option<DMatrix<Real>>,
+    sigma: DVector<Real>,
+    w: DMatrix<Real>,
+    /// Column n: r̃_n (M × K).
+    rt: DMatrix<Real>,
+    et: DVector<Real>,
+    /// s = Φᵀ V 1_N, the row sums Û must have.
+    s: DVector<Real>,
+}
+
+impl NormalEquations {
+    pub fn new(h: &Harmonics, pc: &DMatrix<Real>, pf: &DMatrix<Real>, prior: Option<&Embedding>) -> NormalEquations {
+        let vphi = mass_weighted(h);
+        let s = vphi.row_sum().transpose(); // Φᵀ V 1_N
+        let r = pc * (pf.transpose() * &vphi); // column n: P_c y_nᵀ (M × K)
+        let eig = SymmetricEigen::new(pc * pc.transpose());
+        let w = eig.eigenvectors;
+        let rt = w.transpose() * r;
+        let et = w.transpose() * DVector::from_element(pc.nrows(), 1.0);
+        let prior = prior.map(|b| {
+            // b̂ᵀ = Bᵀ (Φᵀ V)ᵀ, M × K, from B's three entries per row.
+            let mut bt = DMatrix::zeros(pc.nrows(), vphi.ncols());
+            for (i, row) in b.rows.iter().enumerate() {
+                for &(j, wj) in row {
+                    for n in 0..vphi.ncols() {
+                        bt[(j, n)] += wj * vphi[(i, n)];
+                    }
+                }
+            }
+            w.transpose() * bt
+        });
+        NormalEquations { prior, sigma: eig.eigenvalues, w, rt, et, s }
+    }
+
+    /// Û (K × M), row n from eq. 5 with γ_n of `profile`, damped towards the prior when
+    /// `towards_prior` (and one was given).
+    pub fn coefficients(&self, profile: &Profile, towards_prior: bool) -> DMatrix<Real> {
+        self.w_times(&self.coefficients_in_eigenbasis(profile, towards_prior)).transpose()
+    }
+
+    /// Ũ = Wᵀ Ûᵀ (M × K), column n the row solve of mode n in S's eigenbasis.
+    pub fn coefficients_in_eigenbasis(&self, profile: &Profile, towards_prior: bool) -> DMatrix<Real> {
+        let mut ut = DMatrix::zeros(self.w.nrows(), self.rt.ncols());
+        let prior = self.prior.as_ref().filter(|_| towards_prior);
+        for n in 0..self.rt.ncols() {
+            let gamma = profile.gamma(n + 1);
+            let mut rhs = self.rt.column(n).into_owned();
+            if let Some(b) = prior {
+                rhs.axpy(gamma * gamma, &b.column(n), 1.0);
+            }
+            let col = row_in_eigenbasis(&self.sigma, &rhs, &self.et, self.s[n], gamma);
+            ut.set_column(n, &col);
+        }
+        ut
+    }
+
+    /// W x, back from S's eigenbasis.
+    pub fn w_times(&self, x: &DMatrix<Real>) -> DMatrix<Real> {
+        &self.w * x
+    }
+
+    /// Wᵀ x, into S's eigenbasis.
+    pub fn wt_times(&self, x: &DMatrix<Real>) -> DMatrix<Real> {
+        self.w.transpose() * x
+    }
+}
+
+/// Φᵀ V, the mass-weighted projection onto the harmonics, kept transposed (N × K).
+pub fn mass_weighted(h: &Harmonics) -> DMatrix<Real> {
+    DMatrix::from_fn(h.modes.nrows(), h.modes.ncols(), |i, n| h.mass[i] * h.modes[(i, n)])
 }
 
 /// One row of eq. 5 in S's eigenbasis: ũ = D (r̃ − μ ẽ), D = (Σ + γ² I)^{-1}, with the

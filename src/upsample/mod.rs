@@ -8,7 +8,8 @@
 //! damping γ_n of §3.2 and §6), `fit` (the per-row constrained least squares, eq. 5),
 //! `operator` (U and its application), `oscillatory` (the travelling-wave modes of §5), `model` (the versioned model file), `subdivision` (Loop
 //! subdivision, the baseline U is measured against) and `run` (training, applying and
-//! subdividing over run directories) and `track` (tracked training runs, §4).
+//! subdividing over run directories) `track` (tracked training runs, §4) and `validate` (choosing the
+//! damping profile by cross-validation on the training frames).
 //!
 //! Everything assumes one coarse and one fine topology for the whole shot: train and apply on
 //! uniform (fixed-mesh) runs.
@@ -25,9 +26,10 @@ pub mod run;
 pub mod subdivision;
 mod surface;
 pub mod track;
+pub mod validate;
 
 pub use embed::{embedding, Embedding};
-pub use fit::{fit, TrainingSet};
+pub use fit::{fit, fit_towards, Prior, TrainingSet};
 pub use harmonics::Harmonics;
 pub use laplacian::Laplacian;
 pub use model::{Model, ModelError};
@@ -56,6 +58,8 @@ pub enum UpsampleError {
     NoFrames,
     #[error("{levels} subdivision levels asked, at most {max} (4^levels faces per coarse face)")]
     TooManyLevels { levels: usize, max: usize },
+    #[error("{folds} cross-validation folds for {frames} training frames: expected 2..={frames}")]
+    Folds { folds: usize, frames: usize },
     #[error("non-finite value in {what}")]
     NonFinite { what: &'static str },
 }

@@ -133,14 +133,17 @@ pub fn normal_residual(upsampled: &[Vec3], fine: &[Vec3], triangles: &[[usize; 3
     fine.iter().zip(upsampled).zip(&n).map(|((f, u), n)| (f - u).dot(n)).collect()
 }
 
-/// Adds the modes' displacements of frame `frame` to `x` (U p_c) along its normals.
+/// Adds the modes' displacements of frame `frame` to `x` (U p_c) along its normals: per node
+/// Σ e_i1 sin jθ + e_i2 cos jθ, eq. 7, as `displacement` computes it, with each pair's
+/// (sin jθ, cos jθ) evaluated once per frame rather than once per node.
 pub fn add_modes(modes: &[OscillatoryMode], x: &mut [Vec3], triangles: &[[usize; 3]], frame: usize) {
     if modes.is_empty() {
         return;
     }
+    let phase: Vec<(Real, Real)> = modes.iter().map(|m| (frame as Real * m.theta).sin_cos()).collect();
     let n = vertex_normals(x, triangles);
     for (i, (p, n)) in x.iter_mut().zip(n).enumerate() {
-        *p += n * modes.iter().map(|m| m.displacement(i, frame)).sum::<Real>();
+        *p += n * modes.iter().zip(&phase).map(|(m, &(s, c))| m.e[i][0] * s + m.e[i][1] * c).sum::<Real>();
     }
 }
 
@@ -202,6 +205,24 @@ mod tests {
         let want = 0.01 * (1.2 as Real).sin() + 0.02 * (1.2 as Real).cos();
         assert!(x.iter().all(|p| (p.z - want).abs() < 1e-15), "{x:?}");
         assert_eq!((x[1].x, x[2].y), (1.0, 1.0));
+    }
+
+    /// `add_modes` (phases once per frame) adds exactly what `displacement` gives per node.
+    #[test]
+    fn add_modes_matches_displacement_to_the_bit() {
+        let modes: Vec<OscillatoryMode> = (0..3)
+            .map(|k| OscillatoryMode { theta: 0.37 + 0.21 * k as Real, e: vec![[0.013, -0.007 * k as Real]; 3] })
+            .collect();
+        let x0 = vec![Vec3::new(0.0, 0.0, 0.1), Vec3::new(1.0, 0.2, 0.0), Vec3::new(0.1, 1.0, 0.3)];
+        let n = vertex_normals(&x0, &[[0, 1, 2]]);
+        for frame in [0, 7, 123] {
+            let mut x = x0.clone();
+            add_modes(&modes, &mut x, &[[0, 1, 2]], frame);
+            for i in 0..3 {
+                let want = x0[i] + n[i] * modes.iter().map(|m| m.displacement(i, frame)).sum::<Real>();
+                assert_eq!(x[i].map(Real::to_bits), want.map(Real::to_bits), "frame {frame}, node {i}");
+            }
+        }
     }
 
     #[test]

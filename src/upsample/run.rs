@@ -10,7 +10,10 @@ use std::path::{Path, PathBuf};
 use nalgebra::{DMatrix, DVector};
 
 use super::oscillatory::{add_modes, fit_modes, normal_residual, OscillatoryMode};
-use super::{fit, Compact, Harmonics, Laplacian, Model, Profile, Subdivision, Surface, TrainingSet};
+use super::validate::{barycentric_rms, best, cross_validate, Candidate, Scored};
+use super::{
+    embedding, fit_towards, Compact, Harmonics, Laplacian, Model, Prior, Profile, Subdivision, Surface, TrainingSet,
+};
 use crate::io::obj::{read_obj, Corner, ObjData};
 use crate::io::write_atomic;
 use crate::math::{Real, Vec3};
@@ -36,9 +39,10 @@ fn input(path: &Path, msg: impl std::fmt::Display) -> RunError {
 pub struct TrainOptions {
     /// Harmonics kept (None: all N, the paper's choice; `fit` says why).
     pub modes: Option<usize>,
-    pub gamma1: Real,
-    pub gamma_n: Real,
-    pub c: Real,
+    /// The damping profiles to train with: one is used as given; from several, the one of least
+    /// error under `folds`-fold cross-validation on the training frames (`validate`).
+    pub profiles: Vec<Candidate>,
+    pub folds: usize,
     /// Oscillatory mode pairs to fit to the residual (§5; 0: none).
     pub oscillatory: usize,
 }
@@ -50,6 +54,12 @@ pub struct TrainReport {
     pub coarse_nodes: usize,
     pub fine_nodes: usize,
     pub modes: usize,
+    /// The profile U was fitted with.
+    pub profile: Candidate,
+    /// Every candidate's cross-validation score, in the order given (empty: one candidate).
+    pub validation: Vec<Scored>,
+    /// RMS node distance (m) of B p_c to p_f over the training frames (`barycentric_rms`).
+    pub barycentric_rms: Real,
     /// The oscillatory pairs fitted: θ (radians per frame) of each.
     pub oscillatory: Vec<Real>,
 }
@@ -72,14 +82,26 @@ pub fn train(coarse: &Path, fine: &Path, opts: &TrainOptions) -> Result<(Model, 
     let lap = Laplacian::new(&surface).map_err(|e| input(&frame_path(fine, numbers[0]), e))?;
     let modes = opts.modes.unwrap_or(n);
     let h = Harmonics::new(&lap, modes).map_err(|e| RunError::Input(e.to_string()))?;
-    let profile =
-        Profile::from_bounds(opts.gamma1, opts.gamma_n, opts.c, n).map_err(|e| RunError::Input(e.to_string()))?;
+    let bad = |e: super::UpsampleError| RunError::Input(e.to_string());
+    let coarse_surface = Surface::from_obj(&c0).map_err(|e| input(&frame_path(coarse, numbers[0]), e))?;
+    let b = embedding(&coarse_surface, &surface);
     let mut data = TrainingSet::default();
     for &k in &numbers {
         data.coarse.push(positions_like(coarse, k, &c0)?);
         data.fine.push(positions_like(fine, k, &f0)?);
     }
-    let op = fit(&h, &profile, &data).map_err(|e| RunError::Input(e.to_string()))?;
+    let (chosen, validation) = match opts.profiles.as_slice() {
+        [] => return Err(RunError::Input("no damping profile to train with".into())),
+        [one] => (*one, Vec::new()),
+        grid => {
+            let scores = cross_validate(&h, &b, &data, opts.folds, grid).map_err(bad)?;
+            let best = best(&scores).map(|s| s.candidate).unwrap_or(grid[0]);
+            (best, scores)
+        }
+    };
+    let profile = Profile::from_bounds(chosen.gamma1, chosen.gamma_n, chosen.c, n).map_err(bad)?;
+    let prior = (chosen.prior == Prior::Barycentric).then_some(&b);
+    let op = fit_towards(&h, &profile, &data, prior).map_err(bad)?;
     let mut model = Model::from_fine_obj(op, &f0);
     if opts.oscillatory > 0 {
         if numbers.windows(2).any(|w| w[1] != w[0] + 1) {
@@ -92,6 +114,9 @@ pub fn train(coarse: &Path, fine: &Path, opts: &TrainOptions) -> Result<(Model, 
         coarse_nodes: c0.positions.len(),
         fine_nodes: n,
         modes,
+        profile: chosen,
+        validation,
+        barycentric_rms: barycentric_rms(&b, h.mass.as_slice(), &data),
         oscillatory: model.modes.iter().map(|m| m.theta).collect(),
     };
     Ok((model, report))
@@ -119,8 +144,9 @@ pub fn apply(model: &Model, coarse: &Path, out: &Path) -> Result<usize, RunError
     std::fs::create_dir_all(out).map_err(|e| RunError::Output(format!("{}: {e}", out.display())))?;
     let mut compact = Compact::new(&model.op);
     let triangles = model.triangles();
+    let mut fine = vec![Vec3::zeros(); model.op.fine_nodes()];
     for &k in &numbers {
-        let mut fine = compact.apply(&coarse_positions(model, coarse, k)?);
+        compact.apply_into(&coarse_positions(model, coarse, k)?, &mut fine);
         add_modes(&model.modes, &mut fine, &triangles, k);
         let path = frame_path(out, k);
         write_atomic(&path, obj_text("upsampled", &fine, &model.texcoords, &model.faces).as_bytes())
@@ -269,7 +295,8 @@ mod tests {
         write_run(&fine, 9, 6);
         // γ competes with the spectrum of P_c P_cᵀ, which grows with the frame count: for 6
         // frames it must be far below §6's (with γ_N = 10 U is worse than barycentric here).
-        let opts = TrainOptions { modes: None, gamma1: 1e-3, gamma_n: 0.1, c: 4.0, oscillatory: 0 };
+        let profiles = vec![Candidate { gamma1: 1e-3, gamma_n: 0.1, c: 4.0, prior: Prior::Zero }];
+        let opts = TrainOptions { modes: None, profiles, folds: 5, oscillatory: 0 };
         let (model, r) = train(&coarse, &fine, &opts).unwrap();
         assert_eq!((r.frames, r.coarse_nodes, r.fine_nodes, r.modes), (6, 16, 100, 100));
         let model = Model::from_bytes(&model.to_bytes(), "m").unwrap();

@@ -36,3 +36,52 @@ pub fn temp_dir(name: &str) -> PathBuf {
 pub fn inline_scene(v: &serde_json::Value, base: &Path, name: &str) -> Scene {
     scene::load_str(&v.to_string(), Path::new(name), base, name).unwrap_or_else(|e| panic!("{e}"))
 }
+
+/// Largest and material-area-weighted mean principal strain (largest principal stretch − 1) of
+/// an OBJ frame whose `vt` are material metres, computed here from the file alone (closed-form
+/// eigenvalue of FᵀF), to check what `stats.json` says.
+pub fn strain_of_obj(path: &Path) -> (Real, Real) {
+    let obj = viewcloth::io::obj::read_obj(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let (mut max, mut sum, mut area) = (Real::NEG_INFINITY, 0.0, 0.0);
+    for t in &obj.triangles {
+        let x = t.map(|c| obj.positions[c.v]);
+        let u = t.map(|c| obj.texcoords[c.vt.expect("material coordinates")]);
+        let (du1, du2) = (u[1] - u[0], u[2] - u[0]);
+        let det = du1.x * du2.y - du2.x * du1.y;
+        // F = [x1 − x0, x2 − x0] Dm⁻¹, Dm⁻¹ = [[du2.y, −du2.x], [−du1.y, du1.x]] / det.
+        let (e1, e2) = (x[1] - x[0], x[2] - x[0]);
+        let f0 = (e1 * du2.y - e2 * du1.y) / det;
+        let f1 = (e2 * du1.x - e1 * du2.x) / det;
+        let (a, b, d) = (f0.dot(&f0), f0.dot(&f1), f1.dot(&f1));
+        let stretch = (0.5 * (a + d + ((a - d).powi(2) + 4.0 * b * b).sqrt())).sqrt();
+        max = max.max(stretch - 1.0);
+        sum += (stretch - 1.0) * 0.5 * det.abs();
+        area += 0.5 * det.abs();
+    }
+    (max, sum / area)
+}
+
+/// Checks `dir/stats.json` against its OBJ frames: every written frame listed, each frame's
+/// `max_strain` and `mean_strain` what `strain_of_obj` computes (to 1e-6: the OBJ rounds positions
+/// to nanometres), within `bound` (largest |max strain|, |mean strain|), and some frame strained
+/// (a moving cloth is never exactly at rest). Returns the stats.
+pub fn check_stats_strain(dir: &Path, frames: usize, bound: (Real, Real)) -> serde_json::Value {
+    let path = dir.join("stats.json");
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let stats: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let listed = stats["frames"].as_array().unwrap();
+    assert_eq!(listed.len(), frames, "{}", path.display());
+    let mut largest: Real = 0.0;
+    for f in listed {
+        let k = f["frame"].as_u64().unwrap();
+        let (max, mean) = strain_of_obj(&dir.join(format!("frame_{k:04}.obj")));
+        let (got_max, got_mean) = (f["max_strain"].as_f64().unwrap(), f["mean_strain"].as_f64().unwrap());
+        assert!((got_max - max).abs() < 1e-6, "{} frame {k}: max strain {got_max}, the OBJ's {max}", path.display());
+        assert!((got_mean - mean).abs() < 1e-6, "{} frame {k}: mean {got_mean}, the OBJ's {mean}", path.display());
+        let plausible = max.abs() < bound.0 && mean.abs() < bound.1;
+        assert!(plausible, "{} frame {k}: strain {max}, {mean} beyond {bound:?}", path.display());
+        largest = largest.max(max.abs()).max(mean.abs());
+    }
+    assert!(largest > 1e-5, "{}: no frame strained ({largest})", path.display());
+    stats
+}
