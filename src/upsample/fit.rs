@@ -199,18 +199,19 @@ fn stack(frames: &[Vec<Vec3>], rows: usize, which: &str) -> Result<DMatrix<Real>
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::math::Vec2;
     use crate::upsample::{embedding, Laplacian, Surface};
 
     /// A smooth deformation of the material plane, different per frame `t`.
-    fn shape(p: Vec2, t: Real) -> Vec3 {
+    pub(crate) fn shape(p: Vec2, t: Real) -> Vec3 {
         let z = 0.1 * (3.0 * p.x + t).sin() * (1.0 + p.y) + 0.05 * (2.0 * p.y - 0.5 * t).cos();
         Vec3::new(p.x + 0.02 * t * p.y, p.y, z)
     }
 
-    fn frames(s: &Surface, times: &[Real]) -> Vec<Vec<Vec3>> {
+    /// The nodes of `s` deformed by `shape` at each of `times`.
+    pub(crate) fn frames(s: &Surface, times: &[Real]) -> Vec<Vec<Vec3>> {
         let uv = s.node_uv();
         times.iter().map(|&t| uv.iter().map(|p| shape(p.unwrap(), t)).collect()).collect()
     }

@@ -123,18 +123,9 @@ pub fn best(scores: &[Scored]) -> Option<&Scored> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::{Vec2, Vec3};
+    use crate::math::Vec3;
+    use crate::upsample::fit::tests::frames;
     use crate::upsample::{embedding, fit_towards, Laplacian, Surface};
-
-    fn shape(p: Vec2, t: Real) -> Vec3 {
-        let z = 0.1 * (3.0 * p.x + t).sin() * (1.0 + p.y) + 0.05 * (2.0 * p.y - 0.5 * t).cos();
-        Vec3::new(p.x + 0.02 * t * p.y, p.y, z)
-    }
-
-    fn frames(s: &Surface, times: &[Real]) -> Vec<Vec<Vec3>> {
-        let uv = s.node_uv();
-        times.iter().map(|&t| uv.iter().map(|p| shape(p.unwrap(), t)).collect()).collect()
-    }
 
     /// The harmonic-basis error equals the one measured on the fitted U's output, node by node.
     #[test]
