@@ -10,4 +10,4 @@ pub mod lra;
 pub mod strain_limit;
 
 pub use lra::{Distance, Lra, LraParams};
-pub use strain_limit::{limit_strain, StrainLimitReport};
+pub use strain_limit::{StrainLimitReport, StrainLimiter};

@@ -194,9 +194,11 @@ impl StrainLimiter {
     }
 
     /// Projects the faces whose material has limits (`limits[face.material]`) into them, moving
-    /// `x` (free nodes only: `inv_mass` > 0) and marking moved nodes in `moved`.
+    /// `x` (free nodes only: `inv_mass` > 0) and marking moved nodes in `moved`. Uses the limiter
+    /// of `cache`, rebuilt for a new topology; a mesh whose system cannot be analysed is left as
+    /// it is and reported unconverged.
     pub fn limit(
-        &mut self,
+        cache: &mut Option<StrainLimiter>,
         mesh: &Mesh,
         rest: &[MembraneRest],
         limits: &[Option<[Real; 2]>],
@@ -207,7 +209,7 @@ impl StrainLimiter {
         let mut report = StrainLimitReport::default();
         let mut cons: Vec<Limited> = (0..mesh.faces.len())
             .filter_map(|f| {
-                let lim = limits.get(mesh.faces[f].material as usize).copied().flatten()?;
+                let lim = face_limits(mesh, limits, f)?;
                 let nodes = mesh.face_nodes(f);
                 (!nodes.iter().all(|&n| inv_mass[n] <= 0.0)).then(|| Limited {
                     face: f,
@@ -251,6 +253,9 @@ impl StrainLimiter {
             report.converged = true;
             return report;
         }
+        let Ok(this) = StrainLimiter::for_mesh(cache, mesh) else {
+            return report;
+        };
         let free = inv_mass.iter().filter(|&&w| w > 0.0).count().max(1);
         let mean_mass = inv_mass.iter().filter(|&&w| w > 0.0).map(|w| 1.0 / w).sum::<Real>() / free as Real;
         let mw: Vec<Real> = inv_mass.iter().map(|&w| if w > 0.0 { 1.0 / (w * mean_mass) } else { 0.0 }).collect();
@@ -280,7 +285,7 @@ impl StrainLimiter {
                         }
                     }
                 }
-                let Ok(dx) = self.newton_step(x.len(), &cons, &evals, &terms, &mw, &grad, inv_mass, mu) else {
+                let Ok(dx) = this.newton_step(x.len(), &cons, &evals, &terms, &mw, &grad, inv_mass, mu) else {
                     break 'outer;
                 };
                 report.iterations += 1;
@@ -441,44 +446,9 @@ fn merit(x: &[Vec3], x0: &[Vec3], mw: &[Real], terms: &[[Real; 2]], mu: Real) ->
     inertia + 0.5 * mu * terms.iter().map(|t| t[0] * t[0] + t[1] * t[1]).sum::<Real>()
 }
 
-impl StrainLimiter {
-    /// `limit` with the limiter of `cache` (rebuilt for a new topology); a mesh whose system
-    /// cannot be analysed is left as it is and reported unconverged.
-    pub fn limit_cached(
-        cache: &mut Option<StrainLimiter>,
-        mesh: &Mesh,
-        rest: &[MembraneRest],
-        limits: &[Option<[Real; 2]>],
-        x: &mut [Vec3],
-        inv_mass: &[Real],
-        moved: &mut [bool],
-    ) -> StrainLimitReport {
-        match StrainLimiter::for_mesh(cache, mesh) {
-            Ok(l) => l.limit(mesh, rest, limits, x, inv_mass, moved),
-            Err(_) => {
-                let excess = (0..mesh.faces.len())
-                    .filter_map(|f| {
-                        let lim = limits.get(mesh.faces[f].material as usize).copied().flatten()?;
-                        Some(excess(face_stretches(mesh, &rest[f], f, x), lim))
-                    })
-                    .fold(0.0, Real::max);
-                StrainLimitReport { excess, converged: excess <= STOP, ..Default::default() }
-            }
-        }
-    }
-}
-
-/// Projects `x` into the limits with a limiter built for this call (see
-/// `StrainLimiter::limit`; a simulation keeps its limiter across steps instead).
-pub fn limit_strain(
-    mesh: &Mesh,
-    rest: &[MembraneRest],
-    limits: &[Option<[Real; 2]>],
-    x: &mut [Vec3],
-    inv_mass: &[Real],
-    moved: &mut [bool],
-) -> Result<StrainLimitReport, SolveError> {
-    Ok(StrainLimiter::new(mesh)?.limit(mesh, rest, limits, x, inv_mass, moved))
+/// The limits of face `f`'s material, if it has any.
+fn face_limits(mesh: &Mesh, limits: &[Option<[Real; 2]>], f: usize) -> Option<[Real; 2]> {
+    limits.get(mesh.faces[f].material as usize).copied().flatten()
 }
 
 /// Faces whose material has limits with a principal stretch at a limit (within `slack`) or
@@ -491,7 +461,7 @@ pub fn faces_at_limit(
     slack: Real,
 ) -> usize {
     (0..mesh.faces.len())
-        .filter(|&f| match limits.get(mesh.faces[f].material as usize).copied().flatten() {
+        .filter(|&f| match face_limits(mesh, limits, f) {
             Some([lo, hi]) => {
                 let s = face_stretches(mesh, &rest[f], f, x);
                 s[0] <= lo + slack || s[1] >= hi - slack
@@ -566,21 +536,21 @@ mod tests {
         let mut x = stretched(1.2);
         let pinned: Vec<(usize, Vec3)> = (0..x.len()).filter(|&i| inv[i] == 0.0).map(|i| (i, x[i])).collect();
         let mut moved = vec![false; x.len()];
-        let r = limit_strain(&m, &rest, &lim, &mut x, &inv, &mut moved).unwrap();
+        let r = StrainLimiter::limit(&mut None, &m, &rest, &lim, &mut x, &inv, &mut moved);
         assert!(r.converged && r.excess <= TOLERANCE && !r.reverted, "{r:?}");
-        for f in 0..m.faces.len() {
-            let s = face_stretches(&m, &rest[f], f, &x);
+        for (f, r) in rest.iter().enumerate() {
+            let s = face_stretches(&m, r, f, &x);
             assert!(s[0] >= 0.95 - TOLERANCE && s[1] <= 1.05 + TOLERANCE, "face {f}: {s:?}");
         }
         assert!(pinned.iter().all(|&(i, p)| x[i] == p));
         let far = x.iter().map(|p| p.x).fold(0.0, Real::max);
-        assert!(far <= 4.0 * (1.05 + TOLERANCE) && far >= 4.0 * 0.95, "far end at {far}");
+        assert!((4.0 * 0.95..=4.0 * (1.05 + TOLERANCE)).contains(&far), "far end at {far}");
 
         let mut x = stretched(1.7);
         let start = widest(&x);
         for k in 1..=3 {
             let before = widest(&x);
-            let r = limit_strain(&m, &rest, &lim, &mut x, &inv, &mut moved).unwrap();
+            let r = StrainLimiter::limit(&mut None, &m, &rest, &lim, &mut x, &inv, &mut moved);
             let after = widest(&x);
             assert!(after >= before / (1.0 + BUDGET) - TOLERANCE, "projection {k}: {before} -> {after}, {r:?}");
             assert!(after <= (before / (1.0 + BUDGET)).max(1.05) + TOLERANCE, "projection {k}: {before} -> {after}");
@@ -604,11 +574,11 @@ mod tests {
         let inv: Vec<Real> = m.nodes.iter().map(|n| 1.0 / n.mass).collect();
         let mut moved = vec![false; x.len()];
         let lim = [Some([0.95, 1.05])];
-        let r = limit_strain(&m, &rest, &lim, &mut x, &inv, &mut moved).unwrap();
+        let r = StrainLimiter::limit(&mut None, &m, &rest, &lim, &mut x, &inv, &mut moved);
         assert!(r.converged, "{r:?}");
         assert!(r.excess <= TOLERANCE, "{r:?}");
-        for f in 0..m.faces.len() {
-            let s = face_stretches(&m, &rest[f], f, &x);
+        for (f, r) in rest.iter().enumerate() {
+            let s = face_stretches(&m, r, f, &x);
             assert!(s[0] >= 0.95 - TOLERANCE && s[1] <= 1.05 + TOLERANCE, "face {f}: {s:?}");
         }
     }
@@ -622,7 +592,7 @@ mod tests {
         let before = x.clone();
         let mut inv: Vec<Real> = m.nodes.iter().map(|n| 1.0 / n.mass).collect();
         let mut moved = vec![false; x.len()];
-        let r = limit_strain(&m, &rest, &[Some([0.95, 1.05])], &mut x, &inv, &mut moved).unwrap();
+        let r = StrainLimiter::limit(&mut None, &m, &rest, &[Some([0.95, 1.05])], &mut x, &inv, &mut moved);
         assert_eq!(r.iterations, 0);
         assert_eq!(x, before);
         // Now stretched 30% with the left column pinned.
@@ -633,7 +603,7 @@ mod tests {
             }
         }
         let pinned: Vec<(usize, Vec3)> = (0..x.len()).filter(|&i| inv[i] == 0.0).map(|i| (i, x[i])).collect();
-        let r = limit_strain(&m, &rest, &[Some([0.95, 1.05])], &mut x, &inv, &mut moved).unwrap();
+        let r = StrainLimiter::limit(&mut None, &m, &rest, &[Some([0.95, 1.05])], &mut x, &inv, &mut moved);
         assert!(r.converged && r.excess <= TOLERANCE, "{r:?}");
         assert!(pinned.iter().all(|&(i, p)| x[i] == p));
     }

@@ -132,7 +132,7 @@ impl Simulation {
         }
         if let Some(stage) = &mut c.strain {
             self.timed(Stage::StrainLimit, |s| {
-                let r = StrainLimiter::limit_cached(
+                let r = StrainLimiter::limit(
                     &mut stage.limiter,
                     &s.state.mesh,
                     &s.ws.rest.membrane,
