@@ -72,7 +72,7 @@ pub struct LraFrameStats {
 /// Strain limiting (`constraints::strain_limit`).
 #[derive(Serialize, Deserialize, Debug, Clone, Default, PartialEq)]
 pub struct StrainLimitFrameStats {
-    /// Faces with a principal stretch at a limit (within 1e-4) or beyond it at the frame end.
+    /// Faces with a principal stretch at a limit (within 1e-3, the solver tolerance) or beyond it at the frame end.
     pub strain_limit_faces: usize,
     /// Most Gauss–Newton iterations (factorisations) of a step's projection in the frame.
     pub strain_limit_iterations: usize,
