@@ -9,10 +9,12 @@
 //! material area; pinned nodes do not move). It is solved by the augmented Lagrangian method
 //! (Nocedal & Wright 2006, §17.4, for inequalities):
 //!   Φ(x) = ½ Σᵢ (mᵢ/m̄) |xᵢ − x̃ᵢ|² + Σⱼ (μ/2) max(0, cⱼ + λⱼ/μ)²,  λⱼ ← max(0, λⱼ + μ cⱼ),
-//! each Φ minimised by Gauss–Newton steps on the sparse Hessian
-//!   H = diag(mᵢ/m̄) + μ Σ_{j active} ∇cⱼ ∇cⱼᵀ
-//! (a sparse Cholesky over the faces' node couplings, line search on Φ), with
-//! ∂σₖ/∂F = uₖ vₖᵀ (F = U Σ Vᵀ) and ∂F/∂x from D_m⁻¹. ARCSim minimises the same Φ by nonlinear
+//! each Φ minimised by Newton steps on the sparse Hessian
+//!   H = diag(mᵢ/m̄) + μ Σ_{j active} (∇cⱼ ∇cⱼᵀ + tⱼ ∇²cⱼ),  tⱼ = max(0, cⱼ + λⱼ/μ),
+//! ∇²cⱼ made positive semi-definite (`curvature`), constraints near their limit included
+//! (`NEAR`), solved by a sparse Cholesky over the faces' node couplings with a line search on
+//! Φ; ∂σₖ/∂F = uₖ vₖᵀ (F = U Σ Vᵀ) and ∂F/∂x from D_m⁻¹. A face far outside its limits is
+//! brought in by at most a factor 1 + `BUDGET` per step, and a stalled solve stops. ARCSim minimises the same Φ by nonlinear
 //! conjugate gradients for at most 100 iterations and leaves faces well beyond the limits (on
 //! flag.json 2–43% of the area beyond [0.95, 1.05] in its output frames); the direct solve
 //! propagates a correction across the whole cloth in one step, which the local per-face
