@@ -1,7 +1,8 @@
 //! Adaptive remeshing in whole simulations (issue 4, "Tests"): the mesh stays valid and keeps
-//! its material area frame after frame, handles stay on target, a squeezed sheet refines where
-//! it buckles and coarsens back when released, and the adaptive sphere shot uses ≥ 3× fewer faces
-//! than the uniform reference with zero penetrations.
+//! its material area frame after frame, handles stay on target, and the adaptive sphere shot uses
+//! ≥ 3× fewer faces than the uniform reference with zero penetrations. That a squeezed sheet
+//! refines where it buckles and coarsens back when released is tested on ARCSim's own
+//! `square.json` against ARCSim's face counts (`tests/arcsim.rs`, issue 16).
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -55,26 +56,6 @@ fn crumple_square_stays_valid_and_keeps_area_and_handles() {
         }
     }
     assert!(changed, "the mesh never changed");
-}
-
-#[test]
-fn crumple_square_refines_when_squeezed_and_coarsens_when_released() {
-    let stats = run_cli(&scene_path("crumple_square.json"), &temp_dir("crumple"), &[]);
-    let frames = stats["frames"].as_array().unwrap();
-    let faces_at = |t0: f64, t1: f64| -> Vec<f64> {
-        frames
-            .iter()
-            .filter(|f| (t0..t1).contains(&f["time"].as_f64().unwrap()))
-            .map(|f| f["faces"].as_f64().unwrap())
-            .collect()
-    };
-    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
-    let before = mean(&faces_at(0.2, 0.5));
-    let squeezed = mean(&faces_at(2.5, 3.5));
-    let released = mean(&faces_at(6.2, 7.1));
-    assert!(squeezed >= 2.0 * before, "squeezed {squeezed} vs before {before}");
-    assert!(released <= 0.6 * squeezed, "released {released} vs squeezed {squeezed}");
-    assert!(frames.iter().any(|f| f["collapses"].as_u64().unwrap() > 0));
 }
 
 #[test]

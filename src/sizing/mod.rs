@@ -71,10 +71,14 @@ fn material_gradient(dm_inv: &Mat2, f: [Vec3; 3]) -> Mat3x2 {
     Mat3x2::from_columns(&[f[1] - f[0], f[2] - f[0]]) * dm_inv
 }
 
-/// Positive part of a symmetric 2×2 matrix, and its square root.
-fn pos_sqrt(m: &Mat2) -> Mat2 {
+/// Signed square root of a symmetric 2×2 matrix: each eigenvalue λ becomes sign(λ)·√|λ|
+/// (ARCSim 0.2.1 `dynamicremesh.cpp`, `sqrt`). A negative eigenvalue of the compression metric's
+/// discriminant means the face is curved across its compression, so no buckling is expected
+/// there; keeping −√|λ| (rather than 0) lets that curvature silence the criterion.
+fn signed_sqrt(m: &Mat2) -> Mat2 {
     let (l, q) = eigen_sym2(m);
-    q * Mat2::from_diagonal(&Vec2::new(l[0].max(0.0).sqrt(), l[1].max(0.0).sqrt())) * q.transpose()
+    let root = |x: Real| x.signum() * x.abs().sqrt();
+    q * Mat2::from_diagonal(&Vec2::new(root(l[0]), root(l[1]))) * q.transpose()
 }
 
 fn pos(m: &Mat2) -> Mat2 {
@@ -118,7 +122,7 @@ pub fn face_criteria(s: &FaceState, p: &SizingParams) -> Vec<Mat2> {
         let f = material_gradient(&dm_inv, s.x);
         let e = f.transpose() * f - Mat2::identity();
         let d = e.transpose() * e - 4.0 * c * c * adjugate(&s2);
-        out.push(pos(&(-e + pos_sqrt(&d))) / (2.0 * c * c) * view_scale(s));
+        out.push(pos(&(-e + signed_sqrt(&d))) / (2.0 * c * c) * view_scale(s));
     }
     if let Some(dv) = p.refine_velocity {
         let gv = material_gradient(&dm_inv, s.v);
@@ -279,6 +283,22 @@ mod tests {
         f.v = [Vec3::zeros(), Vec3::new(0.0, 0.0, 1.0), Vec3::zeros()];
         let m = face_sizing(&f, &p);
         assert!(m[(0, 0)] > m[(1, 1)] * 2.0, "{m}");
+    }
+
+    #[test]
+    fn curvature_across_the_compression_silences_it() {
+        // Compressed 2% along u (e₀₀ ≈ −0.04) with normals turning along v at 10 m⁻¹: the
+        // discriminant's u eigenvalue is e₀₀² − 4c²κ² < 0, so ARCSim's signed root gives no
+        // compression refinement (a clamped root would ask for e₀₀/(2c²) ≈ 800 m⁻²).
+        let p = SizingParams { refine_angle: None, refine_velocity: None, ..params() };
+        let mut f = flat_face();
+        f.x = f.u.map(|u| Vec3::new(0.98 * u.x, u.y, 0.0));
+        let compressed_flat = face_criteria(&f, &p)[0];
+        assert!(compressed_flat[(0, 0)] > 700.0, "{compressed_flat}");
+        let kappa = 10.0;
+        f.n = f.u.map(|u| Vec3::new(0.0, (kappa * u.y).sin(), (kappa * u.y).cos()));
+        let curved = face_criteria(&f, &p)[0];
+        assert!(curved.norm() < 1e-9, "{curved}");
     }
 
     #[test]
