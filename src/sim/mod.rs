@@ -7,6 +7,7 @@ mod adapt;
 pub mod checkpoint;
 pub mod checks;
 pub mod constrain;
+mod handles;
 pub mod interrupt;
 pub mod output;
 pub mod progress;
