@@ -265,12 +265,10 @@ fn a_scale_zero_keyframe_pulls_the_handle_nodes_onto_a_point() {
     }
 }
 
-/// cylinder.json's circle handles: the rings (OBJ labels 1 and 2) are held on their circles,
-/// the top one turned 90° by its motion, and ring edges the remesher splits bring their new
-/// nodes onto the circle too (ARCSim's `combine_label`).
-#[test]
-fn circle_handles_hold_their_rings_on_the_moving_circle() {
-    let dir = temp_dir("circle");
+/// A conf after cylinder.json: a tube of circumference 0.12 m and height 0.06 m held by circle
+/// handles on its bottom ring (label 1, fixed) and top ring (label 2, turned 90° about z over
+/// 0.4 s), soft (`handle_stiffness` 1e5 N/m per metre), remeshed finer than the rings.
+fn tube_conf(dir: &Path) -> (Real, Real, PathBuf) {
     let (c, height) = (0.12, 0.06);
     let circle = |label: i64, z: Real, motion: Option<i64>| {
         let mut h = json!({"type": "circle", "label": label, "circumference": c, "u": [1, 0],
@@ -289,7 +287,17 @@ fn circle_handles_hold_their_rings_on_the_moving_circle() {
         "gravity": [0, 0, -9.8],
         "magic": {"handle_stiffness": 1e5}
     });
-    let path = write_conf(&dir, "tube", &conf, &[("tube.obj", cylinder_obj(c, height, 8, 3))]);
+    let path = write_conf(dir, "tube", &conf, &[("tube.obj", cylinder_obj(c, height, 8, 3))]);
+    (c, height, path)
+}
+
+/// cylinder.json's circle handles: the rings (OBJ labels 1 and 2) are held on their circles,
+/// the top one turned 90° by its motion, and ring edges the remesher splits bring their new
+/// nodes onto the circle too (ARCSim's `combine_label`).
+#[test]
+fn circle_handles_hold_their_rings_on_the_moving_circle() {
+    let dir = temp_dir("circle");
+    let (c, height, path) = tube_conf(&dir);
     let loaded = scene::load_path(&path, None).unwrap_or_else(|e| panic!("{e}"));
     assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
     let mut sim = Simulation::new(loaded.scene).unwrap();
@@ -518,5 +526,33 @@ fn the_shared_confs_still_check_with_their_old_warnings() {
             "flag.json" => assert!(warned.len() == 1 && warned[0].contains(": duration: "), "{stderr}"),
             _ => assert!(warned.is_empty(), "{}: {stderr}", conf.display()),
         }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Determinism
+
+/// Soft, circle, glue and fading handles and an obstacle window give the same bits on one
+/// thread and on two.
+#[test]
+fn handles_and_windows_give_the_same_bits_on_any_thread_count() {
+    let dir = temp_dir("threads");
+    let (_, _, tube) = tube_conf(&dir);
+    let mut cloth = sheet(0.2, 4);
+    cloth["transform"] = json!({"translate": [0, 0, 0.02]});
+    cloth["handles"] = json!([{"glue": [0, 24], "stiffness": 100.0},
+                              {"nodes": [4], "stiffness": 500.0, "start_time": 0.05, "end_time": 0.1, "fade_time": 0.05}]);
+    let v = scene_of(cloth, json!({"obstacles": [box_obstacle(0.0, json!({"end_time": 0.08}))], "frames": 8}));
+    let native = dir.join("native.json");
+    std::fs::write(&native, v.to_string()).unwrap();
+    for scene in [tube, native] {
+        let run = |threads: &str| {
+            let out = dir.join(format!("{}_{threads}", scene.file_stem().unwrap().to_str().unwrap()));
+            let args = ["simulate", scene.to_str().unwrap(), "--frames", "6", "--threads", threads, "--quiet"];
+            let o = viewcloth(&[&args[..], &["--out", out.to_str().unwrap()]].concat());
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            (0..=6).map(|k| std::fs::read(out.join(format!("frame_{k:04}.obj"))).unwrap()).collect::<Vec<_>>()
+        };
+        assert!(run("1") == run("2"), "{}: frames differ between 1 and 2 threads", scene.display());
     }
 }

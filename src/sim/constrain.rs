@@ -122,7 +122,7 @@ impl Simulation {
     }
 
     /// The constraint stages on a step's end positions `x` (from `x0` over `h`), before
-    /// collision handling; nodes moved get v = (x − x₀)/h. `inv_mass` is 0 for pinned nodes.
+    /// collision handling; nodes moved get v = (x − x₀)/h. `inv_mass` is 0 for nodes held by handles.
     pub(super) fn constrain(&mut self, x0: &[Vec3], inv_mass: &[Real], h: Real, x: &mut [Vec3], v: &mut [Vec3]) {
         let Some(mut c) = self.ws.constraints.take() else { return };
         let mut moved = vec![false; x.len()];

@@ -60,6 +60,10 @@ struct StepData {
     contacts: Vec<Contact>,
     /// 0 for pinned nodes and massless ones (they do not move in projections).
     inv_mass: Vec<Real>,
+    /// `inv_mass`, with 0 also for the nodes soft handles pull to a target: the constraint
+    /// stages keep them where the solve put them (ARCSim's strain limiting keeps every handle
+    /// constraint's value, `strainlimiting.cpp`); collisions move them like free nodes.
+    held_inv_mass: Vec<Real>,
     /// Elastic energy at the start (from the assembly).
     u0: Real,
     /// The work friction may do on the cloth over the step (a moving obstacle's drag).
@@ -140,7 +144,7 @@ impl Simulation {
         let solved = self.timed(Stage::FaultChecks, |s| checks::after_solve(&s.context(&step), v))?;
         let mut v = solved.v.clone();
         let mut x = self.timed(Stage::Integration, |s| s.end_positions(&step, &v));
-        self.constrain(&step.x0, &step.inv_mass, step.h, &mut x, &mut v);
+        self.constrain(&step.x0, &step.held_inv_mass, step.h, &mut x, &mut v);
         if self.ws.collisions.is_some() && !self.scene.disabled.collision {
             let capped = self.timed(Stage::Collision, |s| s.resolve_collisions(&step, &mut x, &mut v));
             if capped && !accept_unresolved {
@@ -308,11 +312,17 @@ impl Simulation {
     ) -> (StepData, Vec<Vec3>) {
         let nodes = &self.state.mesh.nodes;
         let v: Vec<Vec3> = out.v.iter().zip(&pinned).map(|(v, p)| p.unwrap_or(*v)).collect();
-        let inv_mass = nodes
+        let inv_mass: Vec<Real> = nodes
             .iter()
             .zip(&pinned)
             .map(|(n, p)| if p.is_some() || n.mass <= 0.0 { 0.0 } else { 1.0 / n.mass })
             .collect();
+        let mut held_inv_mass = inv_mass.clone();
+        for s in &held.springs {
+            if let Spring::Anchor { node, .. } = s {
+                held_inv_mass[*node] = 0.0;
+            }
+        }
         let obstacle_speed = match &self.ws.collisions {
             Some(w) => w.obstacle_velocities(h).iter().map(|v| v.norm()).fold(0.0, Real::max),
             None => 0.0,
@@ -320,8 +330,20 @@ impl Simulation {
         let x0 = self.state.mesh.positions();
         let (u0, friction_work, stuck) = (out.u0, out.friction_work, out.stuck.clone());
         let Held { exact, springs } = held;
-        let step =
-            StepData { h, x0, pinned, exact, springs, contacts, inv_mass, u0, friction_work, stuck, obstacle_speed };
+        let step = StepData {
+            h,
+            x0,
+            pinned,
+            exact,
+            springs,
+            contacts,
+            inv_mass,
+            held_inv_mass,
+            u0,
+            friction_work,
+            stuck,
+            obstacle_speed,
+        };
         (step, v)
     }
 
