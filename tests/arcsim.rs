@@ -155,7 +155,14 @@ fn converted_scenes_load_like_their_confs() {
 #[test]
 fn bad_confs_name_the_json_path() {
     let dir = temp_dir("arcsim-bad");
-    std::fs::create_dir_all(dir.join("conf")).unwrap();
+    for sub in ["conf", "meshes", "materials"] {
+        std::fs::create_dir_all(dir.join(sub)).unwrap();
+    }
+    let square = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3\nf 1/1 3/3 4/4\n";
+    std::fs::write(dir.join("meshes/m.obj"), square).unwrap();
+    let material = r#"{"density": 0.1, "stretching": [[9, 1, 9, 3], [9, 1, 9, 3], [9, 1, 9, 3], [9, 1, 9, 3], [9, 1, 9, 3], [9, 1, 9, 3]],
+                       "bending": [[1e-6, 1e-6, 1e-6, 1e-6, 1e-6], [1e-6, 1e-6, 1e-6, 1e-6, 1e-6], [1e-6, 1e-6, 1e-6, 1e-6, 1e-6]]}"#;
+    std::fs::write(dir.join("materials/m.json"), material).unwrap();
     let write = |name: &str, text: &str| {
         let p = dir.join("conf").join(name);
         std::fs::write(&p, text).unwrap();
@@ -177,6 +184,15 @@ fn bad_confs_name_the_json_path() {
                 "obstacles": [{"mesh": "s.obj", "motion": 2}]}"#,
             "obstacles[0].motion: expected a motion index",
         ),
+        (
+            // Found by the scene loader in the converted scene, reported where it is in the conf.
+            "scale.json",
+            r#"{"frame_time": 0.04, "end_frame": 3,
+                "motions": [[{"time": 0}, {"time": 1, "transform": {"scale": -1}}]],
+                "cloths": [{"mesh": "meshes/m.obj", "materials": [{"data": "materials/m.json"}]}],
+                "handles": [{"nodes": [0], "motion": 0}]}"#,
+            "motions[0][1].transform.scale: expected a number ≥ 0",
+        ),
     ];
     for (name, text, expected) in cases {
         let path = write(name, text);
@@ -197,8 +213,8 @@ fn unsupported_keys_are_one_warning_line_each() {
         r#"{"frame_time": 0.04, "frame_steps": 2, "end_frame": 2,
             "cloths": [{"mesh": "meshes/square4.obj",
                         "materials": [{"data": "materials/paper.json", "yield_curv": 3}]}],
-            "handles": [{"type": "glue", "nodes": [0, 1]}],
-            "magic": {"handle_stiffness": 1e4, "rib_stiffening": 2, "repulsion_thickness": 2e-3},
+            "handles": [{"nodes": [0], "labels": [1]}],
+            "magic": {"projection_thickness": 1e-4, "rib_stiffening": 2, "repulsion_thickness": 2e-3},
             "passive_time": 1, "frobnicate": true}"#,
     )
     .unwrap();
@@ -211,8 +227,8 @@ fn unsupported_keys_are_one_warning_line_each() {
     let lines: Vec<&str> = stderr.lines().collect();
     for key in [
         "cloths[0].materials[0].yield_curv",
-        "handles[0].type",
-        "magic.handle_stiffness",
+        "handles[0].labels",
+        "magic.projection_thickness",
         "magic.rib_stiffening",
         "passive_time",
         "frobnicate",

@@ -2,7 +2,8 @@
 //! gradients against central differences of the energy, exact Hessians against central
 //! differences of the gradient, at shrinking ε, showing the O(ε²) rate of central differences.
 //! Also: rigid motions give zero elastic force, and the PSD projections are PSD and agree with
-//! the exact Hessian where nothing needs projecting.
+//! the exact Hessian where nothing needs projecting. Soft handles' springs (`forces::handle`)
+//! are checked the same way.
 
 mod common;
 
@@ -10,6 +11,7 @@ use common::fd::{fd_errors, max_abs, FdErrors};
 use common::Rng;
 use nalgebra::{SMatrix, SVector, UnitQuaternion};
 use viewcloth::forces::bending::{bending, dihedral_angle, BendingRest};
+use viewcloth::forces::handle::{anchor_spring, glue_spring, Spring};
 use viewcloth::forces::membrane::{membrane, MembraneRest, MembraneStiffness};
 use viewcloth::forces::wind::{wind_face, Wind};
 use viewcloth::forces::{edge_angles, Projection, RestState};
@@ -490,4 +492,32 @@ fn fd_check_detects_a_wrong_hessian() {
         })
     });
     assert!(bending_gn.is_err(), "FD check accepted the Gauss–Newton bending Hessian");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Soft handles
+
+#[test]
+fn handle_springs_match_finite_differences() {
+    let mut rng = Rng(12);
+    for _ in 0..30 {
+        let k = rng.range(1.0, 1e6);
+        let (x, target) = (rng.vec() * 0.3, rng.vec() * 0.3);
+        check_fd("anchor spring", &x, 0.1, |y| anchor_spring(y, &target, k));
+        let (a, b) = (rng.vec() * 0.3, rng.vec() * 0.3);
+        let ab = SVector::<Real, 6>::from_fn(|r, _| if r < 3 { a[r] } else { b[r - 3] });
+        let glue = |y: &SVector<Real, 6>| glue_spring(&y.fixed_rows::<3>(0).into(), &y.fixed_rows::<3>(3).into(), k);
+        check_fd("glue spring", &ab, 0.1, glue);
+        assert_psd("glue spring", &glue(&ab).2);
+        // The energy a step's check sums is the kernel's.
+        let xs = [a, b];
+        let e = Spring::Glue { nodes: [0, 1], k }.energy(&xs);
+        assert!((e - 0.5 * k * (b - a).norm_squared()).abs() <= 1e-12 * e.max(1e-30));
+        let e = Spring::Anchor { node: 1, target, k }.energy(&xs);
+        assert!((e - 0.5 * k * (b - target).norm_squared()).abs() <= 1e-12 * e.max(1e-30));
+        // Moving both glued nodes together changes nothing.
+        let t = rng.vec();
+        let (eg, g, _) = glue_spring(&(a + t), &(b + t), k);
+        assert!((eg - glue(&ab).0).abs() <= 1e-9 * eg.max(1e-30) && (g - glue(&ab).1).norm() <= 1e-9 * k);
+    }
 }

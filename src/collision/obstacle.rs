@@ -8,12 +8,17 @@
 //!
 //! Analytic shapes are meshed at load, inscribed in the true surface (vertices on it), fine
 //! enough that the chordal error (the largest gap between a face and the surface) is at most
-//! `CHORDAL_TOLERANCE` × radius. Every closed mesh is oriented outward (positive signed volume);
-//! an OBJ is reoriented consistently if some of its faces disagree with their neighbours.
+//! `CHORDAL_TOLERANCE` × radius, with outward faces. An OBJ keeps the orientation its file
+//! gives: its normals say which side is outside, so a closed mesh whose normals face inward
+//! (a shell that holds the cloth inside, ARCSim's `sphere-inv.obj`) keeps them. Only faces that
+//! disagree with their neighbours are turned, to the orientation that most of the component's
+//! area has in the file (`orient_consistently`).
+//!
+//! An obstacle is present during its `Window` only (`present_at`).
 
 use std::collections::HashMap;
 
-use super::shape::{MeshSequence, Obstacle, ObstacleShape};
+use super::shape::{MeshSequence, Obstacle, ObstacleShape, Window};
 use crate::math::motion::{Motion, Transform};
 use crate::math::{Real, Vec3};
 
@@ -29,6 +34,7 @@ pub struct ObstacleBody {
     shape: LocalShape,
     transform: Transform,
     motion: Option<Motion>,
+    window: Window,
 }
 
 #[derive(Clone, Debug)]
@@ -47,7 +53,7 @@ impl ObstacleBody {
         let (shape, triangles) = match &o.shape {
             ObstacleShape::Mesh(d) => {
                 let mut tris: Vec<[usize; 3]> = d.triangles.iter().map(|t| t.map(|c| c.v)).collect();
-                orient_outward(&mut tris, &d.positions);
+                orient_consistently(&mut tris, &d.positions);
                 (LocalShape::Rigid(d.positions.clone()), tris)
             }
             ObstacleShape::Sequence(s) => sequence_shape(s),
@@ -56,7 +62,25 @@ impl ObstacleBody {
             ObstacleShape::Box { size } => rigid(box_mesh(*size)),
             ObstacleShape::Capsule { radius, length } => rigid(capsule_mesh(*radius, *length, CHORDAL_TOLERANCE)),
         };
-        ObstacleBody { name: o.name.clone(), triangles, shape, transform: o.transform, motion: o.motion.clone() }
+        ObstacleBody {
+            name: o.name.clone(),
+            triangles,
+            shape,
+            transform: o.transform,
+            motion: o.motion.clone(),
+            window: o.window,
+        }
+    }
+
+    /// Whether the obstacle is present at `t` (its window; ARCSim's obstacle `start_time` and
+    /// `end_time`).
+    pub fn present_at(&self, t: Real) -> bool {
+        self.window.contains(t)
+    }
+
+    /// Whether the obstacle is ever absent.
+    pub fn has_window(&self) -> bool {
+        !self.window.is_always()
     }
 
     /// Faces as vertex indices into `positions_at(t)`; counter-clockwise seen from outside.
@@ -116,7 +140,7 @@ fn rigid((positions, triangles): (Vec<Vec3>, Vec<[usize; 3]>)) -> (LocalShape, V
 
 fn sequence_shape(s: &MeshSequence) -> (LocalShape, Vec<[usize; 3]>) {
     let mut tris: Vec<[usize; 3]> = s.mesh.triangles.iter().map(|t| t.map(|c| c.v)).collect();
-    orient_outward(&mut tris, &s.frames[0]);
+    orient_consistently(&mut tris, &s.frames[0]);
     let shape = LocalShape::Sequence { frames: s.frames.clone(), start_time: s.start_time, fps: s.fps };
     (shape, tris)
 }
@@ -135,10 +159,13 @@ fn interpolate_frames(frames: &[Vec<Vec3>], s: Real) -> Vec<Vec3> {
     frames[k].iter().zip(&frames[k + 1]).map(|(a, b)| a * (1.0 - w) + b * w).collect()
 }
 
-/// Makes face orientations agree across every manifold edge (breadth-first from the first face
-/// of each connected component, which keeps its file orientation), then turns each closed
-/// component outward (positive signed volume).
-pub fn orient_outward(tris: &mut [[usize; 3]], positions: &[Vec3]) {
+/// Makes face orientations agree across every manifold edge, component by component: a
+/// breadth-first pass from the component's first face turns each neighbour that traverses a
+/// shared edge the same way; then, if the faces this turned hold more of the component's area
+/// than those it kept, the whole component is turned back. So a consistent file is left as it
+/// is (inward normals included), and an inconsistent one takes the orientation most of its area
+/// has in the file.
+pub fn orient_consistently(tris: &mut [[usize; 3]], positions: &[Vec3]) {
     let mut edge_faces: HashMap<(usize, usize), Vec<usize>> = HashMap::new();
     for (f, t) in tris.iter().enumerate() {
         for k in 0..3 {
@@ -146,38 +173,46 @@ pub fn orient_outward(tris: &mut [[usize; 3]], positions: &[Vec3]) {
             edge_faces.entry((a.min(b), a.max(b))).or_default().push(f);
         }
     }
-    let mut component = vec![usize::MAX; tris.len()];
+    let area = |t: &[usize; 3]| (positions[t[1]] - positions[t[0]]).cross(&(positions[t[2]] - positions[t[0]])).norm();
+    let mut seen = vec![false; tris.len()];
+    let mut turned = vec![false; tris.len()];
     let mut queue = std::collections::VecDeque::new();
     for seed in 0..tris.len() {
-        if component[seed] != usize::MAX {
+        if seen[seed] {
             continue;
         }
-        component[seed] = seed;
+        seen[seed] = true;
         queue.push_back(seed);
         let mut members = vec![seed];
-        let mut closed = true;
         while let Some(f) = queue.pop_front() {
             for k in 0..3 {
                 let (a, b) = (tris[f][k], tris[f][(k + 1) % 3]);
                 let faces = &edge_faces[&(a.min(b), a.max(b))];
                 if faces.len() != 2 {
-                    closed = false;
                     continue;
                 }
                 let g = if faces[0] == f { faces[1] } else { faces[0] };
-                if component[g] != usize::MAX {
+                if seen[g] {
                     continue;
                 }
                 // A consistent neighbour traverses the shared edge as b → a.
                 if (0..3).any(|j| tris[g][j] == a && tris[g][(j + 1) % 3] == b) {
                     tris[g].swap(1, 2);
+                    turned[g] = true;
                 }
-                component[g] = seed;
+                seen[g] = true;
                 members.push(g);
                 queue.push_back(g);
             }
         }
-        if closed && signed_volume(members.iter().map(|&f| &tris[f]), positions) < 0.0 {
+        let (mut kept_area, mut turned_area) = (0.0, 0.0);
+        for &f in &members {
+            match turned[f] {
+                true => turned_area += area(&tris[f]),
+                false => kept_area += area(&tris[f]),
+            }
+        }
+        if turned_area > kept_area {
             members.iter().for_each(|&f| tris[f].swap(1, 2));
         }
     }
@@ -410,20 +445,37 @@ mod tests {
     }
 
     #[test]
-    fn orient_outward_repairs_flipped_and_inward_faces() {
+    fn orientation_is_the_files_repaired_by_majority() {
         let (x, good) = sphere_mesh(1.0, 0.05);
-        // Everything inward, and a few faces flipped back.
-        let mut tris: Vec<[usize; 3]> = good.iter().map(|t| [t[0], t[2], t[1]]).collect();
-        for t in tris.iter_mut().step_by(7) {
+        // Consistently inward (a shell holding cloth inside): kept as it is.
+        let inward: Vec<[usize; 3]> = good.iter().map(|t| [t[0], t[2], t[1]]).collect();
+        let mut tris = inward.clone();
+        orient_consistently(&mut tris, &x);
+        assert_eq!(tris, inward);
+        assert!(signed_volume(&tris, &x) < 0.0);
+        // Inward with a few faces flipped back (the first one among them): the majority wins.
+        for flip_first in [false, true] {
+            let mut tris = inward.clone();
+            for t in tris.iter_mut().skip(usize::from(!flip_first)).step_by(7) {
+                t.swap(1, 2);
+            }
+            orient_consistently(&mut tris, &x);
+            assert_closed_consistent(&tris);
+            assert!(signed_volume(&tris, &x) < 0.0, "flip_first {flip_first}");
+        }
+        // Outward with a few faces flipped: outward.
+        let mut tris = good.clone();
+        for t in tris.iter_mut().step_by(5) {
             t.swap(1, 2);
         }
-        orient_outward(&mut tris, &x);
+        orient_consistently(&mut tris, &x);
         assert_closed_consistent(&tris);
         assert!(signed_volume(&tris, &x) > 0.0);
-        // An open patch keeps the orientation of its first face.
+        // An open patch with one face of two flipped: the larger area decides (both equal here,
+        // so the first face's orientation stays).
         let (px, mut ptris) = plane_mesh([1.0, 1.0]);
         ptris[1].swap(1, 2);
-        orient_outward(&mut ptris, &px);
+        orient_consistently(&mut ptris, &px);
         assert_eq!(ptris, plane_mesh([1.0, 1.0]).1);
     }
 
@@ -433,6 +485,7 @@ mod tests {
             shape,
             transform: Transform::new([0.0, 0.0, 1.0], Some([90.0, 0.0, 0.0, 1.0]), 2.0),
             motion,
+            window: Default::default(),
         }
     }
 

@@ -39,13 +39,40 @@ pub struct MeshSequence {
 }
 
 /// An obstacle: its shape in local coordinates, placed by `transform` and then moved by
-/// `motion`.
+/// `motion`, present during `window`.
 #[derive(Clone, Debug)]
 pub struct Obstacle {
     pub name: String,
     pub shape: ObstacleShape,
     pub transform: Transform,
     pub motion: Option<Motion>,
+    pub window: Window,
+}
+
+/// When an obstacle is present: from `start` to `end`, both included (ARCSim's obstacle
+/// `start_time` / `end_time`, `obstacle.cpp`: before it the obstacle has no mesh yet, after it
+/// the mesh is deleted).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Window {
+    pub start: Real,
+    pub end: Real,
+}
+
+impl Default for Window {
+    fn default() -> Self {
+        Window { start: Real::NEG_INFINITY, end: Real::INFINITY }
+    }
+}
+
+impl Window {
+    pub fn contains(&self, t: Real) -> bool {
+        t >= self.start && t <= self.end
+    }
+
+    /// Present at every time.
+    pub fn is_always(&self) -> bool {
+        *self == Window::default()
+    }
 }
 
 impl Obstacle {

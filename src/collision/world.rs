@@ -48,11 +48,16 @@ pub struct CollisionCounters {
 pub struct CollisionWorld {
     pub params: CollisionParams,
     pub bodies: Vec<ObstacleBody>,
-    /// Obstacle triangles in fixed-point numbering (offset by body, not by cloth node count).
+    /// Which bodies take part in the current step: those present at its end (ARCSim updates
+    /// its obstacles to the step's end time before anything else).
+    present: Vec<bool>,
+    /// Obstacle triangles of the present bodies in fixed-point numbering (offset by body, not
+    /// by cloth node count).
     obs_tris: Vec<[usize; 3]>,
-    /// First fixed-point index of each body, and the total at the end.
+    /// First fixed-point index of each body (an absent body has an empty range), and the total
+    /// at the end.
     body_start: Vec<usize>,
-    /// Obstacle vertex positions at the start and end of the current step.
+    /// Vertex positions of the present bodies at the start and end of the current step.
     pub obs_x0: Vec<Vec3>,
     pub obs_x1: Vec<Vec3>,
     /// Outward unit normals of the obstacle vertices at `obs_x1`.
@@ -73,12 +78,42 @@ struct BodySdf {
 
 impl CollisionWorld {
     pub fn new(params: CollisionParams, bodies: Vec<ObstacleBody>, t: Real) -> Self {
+        let present = bodies.iter().map(|b| b.present_at(t)).collect();
+        let mut w = CollisionWorld {
+            params,
+            bodies,
+            present,
+            obs_tris: Vec::new(),
+            body_start: Vec::new(),
+            obs_x0: Vec::new(),
+            obs_x1: Vec::new(),
+            obs_normals: Vec::new(),
+            obs_edges: Vec::new(),
+            obs_edge_opposite: Vec::new(),
+            broad: BroadPhase::default(),
+            sdfs: Vec::new(),
+        };
+        w.sdfs = w.bodies.iter().map(|_| Mutex::new(None)).collect();
+        w.lay_out();
+        w.obs_x1 = w.positions_at(t);
+        w.obs_normals = w.obstacle_vertex_normals();
+        w.obs_x0 = w.obs_x1.clone();
+        w
+    }
+
+    /// The fixed-point numbering of the present bodies: triangles, edges and each edge's
+    /// opposite vertices.
+    fn lay_out(&mut self) {
         let mut obs_tris = Vec::new();
         let mut body_start = vec![0];
-        for b in &bodies {
+        for (b, body) in self.bodies.iter().enumerate() {
             let offset = body_start[body_start.len() - 1];
-            obs_tris.extend(b.triangles().iter().map(|t| t.map(|i| i + offset)));
-            body_start.push(offset + b.vertex_count());
+            if !self.present[b] {
+                body_start.push(offset);
+                continue;
+            }
+            obs_tris.extend(body.triangles().iter().map(|t| t.map(|i| i + offset)));
+            body_start.push(offset + body.vertex_count());
         }
         let mut obs_edges: Vec<[usize; 2]> = obs_tris
             .iter()
@@ -95,35 +130,30 @@ impl CollisionWorld {
                 }
             }
         }
-        let mut w = CollisionWorld {
-            params,
-            bodies,
-            obs_tris,
-            body_start,
-            obs_x0: Vec::new(),
-            obs_x1: Vec::new(),
-            obs_normals: Vec::new(),
-            obs_edges,
-            obs_edge_opposite,
-            broad: BroadPhase::default(),
-            sdfs: Vec::new(),
-        };
-        w.sdfs = w.bodies.iter().map(|_| Mutex::new(None)).collect();
-        w.obs_x1 = w.positions_at(t);
-        w.obs_normals = w.obstacle_vertex_normals();
-        w.obs_x0 = w.obs_x1.clone();
-        w
+        (self.obs_tris, self.body_start, self.obs_edges, self.obs_edge_opposite) =
+            (obs_tris, body_start, obs_edges, obs_edge_opposite);
     }
 
+    /// Vertex positions of the bodies taking part in the current step, at `t`.
     fn positions_at(&self, t: Real) -> Vec<Vec3> {
-        self.bodies.iter().flat_map(|b| b.positions_at(t)).collect()
+        self.bodies.iter().zip(&self.present).filter(|(_, &p)| p).flat_map(|(b, _)| b.positions_at(t)).collect()
     }
 
-    /// Moves the obstacles to the step `[t0, t1]`.
+    /// Moves the obstacles to the step `[t0, t1]`; the bodies present at `t1` take part.
     pub fn advance(&mut self, t0: Real, t1: Real) {
+        let present: Vec<bool> = self.bodies.iter().map(|b| b.present_at(t1)).collect();
+        if present != self.present {
+            self.present = present;
+            self.lay_out();
+        }
         self.obs_x0 = self.positions_at(t0);
         self.obs_x1 = self.positions_at(t1);
         self.obs_normals = self.obstacle_vertex_normals();
+    }
+
+    /// Whether body `b` is present at `t` (its window; only present bodies are queried).
+    pub fn present(&self, b: usize, t: Real) -> bool {
+        self.bodies[b].present_at(t)
     }
 
     /// Calls `f` with the signed distance field of body `b` at time `t`. The field is built at
@@ -523,12 +553,14 @@ mod tests {
             shape: ObstacleShape::Capsule { radius: 0.2, length: 0.5 },
             transform: Transform::default(),
             motion: Some(Motion::new(vec![key(0.0, 0.0), key(1.0, 75.0)])),
+            window: Default::default(),
         };
         let block = Obstacle {
             name: "box".into(),
             shape: ObstacleShape::Box { size: [0.3, 0.4, 0.5] },
             transform: Transform::new([0.0, 0.0, 0.6], Some([30.0, 0.0, 0.0, 1.0]), 1.0),
             motion: None,
+            window: Default::default(),
         };
         let bodies: Vec<ObstacleBody> = [capsule, block].iter().map(ObstacleBody::new).collect();
         let world = CollisionWorld::new(CollisionParams::default(), bodies, 0.0);

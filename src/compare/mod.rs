@@ -272,7 +272,7 @@ fn obstacles(ref_files: &RunFiles, bodies: &[ObstacleBody], frame: usize, time: 
         return Ok(m);
     }
     let mut m = FrameMeshes::default();
-    for b in bodies {
+    for b in bodies.iter().filter(|b| b.present_at(time)) {
         m.append(b.positions_at(time), b.triangles().to_vec());
     }
     Ok(m)

@@ -4,6 +4,7 @@
 
 pub mod bending;
 pub mod data_driven;
+pub mod handle;
 pub mod material;
 pub mod membrane;
 pub mod wind;

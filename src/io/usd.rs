@@ -23,7 +23,7 @@
 //!         primvars:st:indices, in the input's texture units): all time-sampled } }
 //!     def Scope "obstacles" { def Mesh "<obstacle>" { points, extent, velocities (m/s)
 //!         time-sampled (velocities once, zero, for an obstacle that never moves); the faces
-//!         once } }
+//!         once; visibility time-sampled for an obstacle present only in a time window } }
 //! }
 //! ```
 //! Reals are written as the shortest decimal of their 32-bit float (USD's `float`), so the
@@ -59,6 +59,8 @@ pub struct ObstacleFrame<'a> {
     /// Per vertex (m/s); `None` for an obstacle that never moves (written once, as zeros).
     pub velocities: Option<Vec<Vec3>>,
     pub triangles: &'a [[usize; 3]],
+    /// Whether it is present at this frame; `None` for an obstacle that is always present.
+    pub visible: Option<bool>,
 }
 
 /// The samples file of one frame: each cloth of `mesh` as a Mesh prim under `/World/cloth`, each
@@ -223,6 +225,10 @@ fn obstacle_samples(s: &mut String, prim: &str, o: &ObstacleFrame) {
     match &o.velocities {
         Some(v) => line(s, prim, 't', "vector3f[] velocities", |s| vec3s(s, v.iter())),
         None => line(s, prim, 'u', "vector3f[] velocities", |s| vec3s(s, o.positions.iter().map(|_| &ZERO))),
+    }
+    if let Some(visible) = o.visible {
+        let token = if visible { "\"inherited\"" } else { "\"invisible\"" };
+        line(s, prim, 't', "token visibility", |s| s.push_str(token));
     }
 }
 
@@ -423,7 +429,7 @@ mod tests {
         let tri = [[0, 1, 2]];
         let frame = |mesh: &Mesh| {
             let positions = vec![Vec3::zeros(), Vec3::x(), Vec3::y()];
-            let o = ObstacleFrame { name: "ball", positions, velocities: None, triangles: &tri };
+            let o = ObstacleFrame { name: "ball", positions, velocities: None, triangles: &tri, visible: None };
             frame_samples(mesh, &cloths, &[o])
         };
         std::fs::write(dir.join("a"), frame(&mesh)).unwrap();

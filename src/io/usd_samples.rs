@@ -16,6 +16,8 @@ pub struct PrimMesh {
     pub prim: String,
     pub positions: Vec<Vec3>,
     pub triangles: Vec<[usize; 3]>,
+    /// Time-sampled `visibility` "invisible": an obstacle outside its time window.
+    pub hidden: bool,
 }
 
 /// A frame's meshes: the cloths (`/World/cloth/…`), then the obstacles (`/World/obstacles/…`),
@@ -58,11 +60,12 @@ pub fn read_samples(path: &Path) -> Result<SampledFrame, String> {
                 }
                 mesh.triangles = c.chunks(3).map(|t| [t[0] as usize, t[1] as usize, t[2] as usize]).collect();
             }
+            "token visibility" => mesh.hidden = value.contains("invisible"),
             _ => {}
         }
     }
     let mut frame = SampledFrame::default();
-    for mesh in prims {
+    for mesh in prims.into_iter().filter(|m| !m.hidden) {
         if let Some(i) = mesh.triangles.iter().flatten().find(|&&i| i >= mesh.positions.len()) {
             return Err(format!("{}: vertex index {i} of {} points", mesh.prim, mesh.positions.len()));
         }
@@ -106,7 +109,13 @@ mod tests {
         let cloths = [ClothOut { name: "sheet".into(), uv_unit: 1.0 }];
         let tri = [[0, 1, 2]];
         let positions = vec![Vec3::zeros(), Vec3::x(), Vec3::y()];
-        let o = ObstacleFrame { name: "ball", positions: positions.clone(), velocities: None, triangles: &tri };
+        let o = ObstacleFrame {
+            name: "ball",
+            positions: positions.clone(),
+            velocities: None,
+            triangles: &tri,
+            visible: None,
+        };
         let path = dir.join("frame_0000.txt");
         std::fs::write(&path, frame_samples(&mesh, &cloths, &[o])).unwrap();
         let frame = read_samples(&path).unwrap();

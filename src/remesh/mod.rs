@@ -42,17 +42,22 @@ pub struct RemeshLimits {
 }
 
 /// Remeshes `mesh` to the per-vert sizing metrics `vsize`; nodes flagged in `pinned` (handles)
-/// survive; `shapes` are the faces' rest shape operators (`rest_shape`; empty for a flat rest
-/// shape). Returns the new mesh with the map from old to new node ids and the new faces' rest
-/// shape operators.
+/// survive; `groups` (empty: none) gives nodes a group that a node split between two of them
+/// joins; `shapes` are the faces' rest shape operators (`rest_shape`; empty for a flat rest
+/// shape). Returns the new mesh with the map from old to new node ids, the new faces' rest
+/// shape operators and the nodes' groups.
 pub fn remesh(
     mesh: &Mesh,
     vsize: Vec<Mat2>,
     pinned: Vec<bool>,
+    groups: &[u32],
     shapes: &[Mat2],
     limits: &RemeshLimits,
 ) -> Result<(Finished, RemeshStats), MeshError> {
     let mut w = Work::new(mesh, vsize, pinned, shapes);
+    if !groups.is_empty() {
+        w.group = groups.to_vec();
+    }
     let mut stats = RemeshStats::default();
     let mut guard = Guard::new(&w);
     flip_all(&mut w, &mut guard, &mut stats);

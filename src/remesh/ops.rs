@@ -9,7 +9,8 @@ use super::work::{FaceData, Work};
 /// removed and added (over old and new vert ids), verts removed.
 #[derive(Clone, Debug, Default)]
 pub struct Op {
-    pub new_nodes: Vec<(Vec3, Vec3, u16)>,
+    /// (position, velocity, cloth, group).
+    pub new_nodes: Vec<(Vec3, Vec3, u16, u32)>,
     /// (material coordinate, node id — old or new —, sizing metric).
     pub new_verts: Vec<(Vec2, usize, Mat2)>,
     pub remove_faces: Vec<usize>,
@@ -22,8 +23,8 @@ pub struct Op {
 impl Op {
     /// Applies the change; returns the ids of the added faces.
     pub fn apply(&self, w: &mut Work) -> Vec<usize> {
-        for &(x, v, c) in &self.new_nodes {
-            w.add_node(x, v, c);
+        for &(x, v, c, g) in &self.new_nodes {
+            w.add_node(x, v, c, g);
         }
         for &(u, node, m) in &self.new_verts {
             w.add_vert(u, node, m);
@@ -67,7 +68,9 @@ pub fn split(w: &Work, a: usize, b: usize) -> Option<Op> {
     let (na, nb) = (w.vnode[a], w.vnode[b]);
     let mut op = Op::default();
     let node = w.x.len();
-    op.new_nodes.push((0.5 * (w.x[na] + w.x[nb]), 0.5 * (w.v[na] + w.v[nb]), w.cloth[na]));
+    // A node between two nodes of one group joins it (ARCSim's `combine_label`).
+    let group = if w.group[na] == w.group[nb] { w.group[na] } else { 0 };
+    op.new_nodes.push((0.5 * (w.x[na] + w.x[nb]), 0.5 * (w.v[na] + w.v[nb]), w.cloth[na], group));
     let p = w.u.len();
     op.new_verts.push((0.5 * (w.u[a] + w.u[b]), node, 0.5 * (w.vsize[a] + w.vsize[b])));
     for &f in &faces {

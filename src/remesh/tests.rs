@@ -72,7 +72,7 @@ fn full_remesh_meets_the_metric() {
             Mat2::new(1.0 / (hx * hx), 0.0, 0.0, 1.0 / (0.15 * 0.15))
         })
         .collect();
-    let (done, stats) = remesh(&mesh, vsize, vec![false; mesh.nodes.len()], &[], &limits(0.02)).unwrap();
+    let (done, stats) = remesh(&mesh, vsize, vec![false; mesh.nodes.len()], &[], &[], &limits(0.02)).unwrap();
     done.mesh.validate().unwrap();
     assert!(stats.splits > 0);
     // Re-evaluate the same field on the new verts and check every edge.
@@ -100,7 +100,8 @@ fn flat_sheet_at_rest_with_its_own_size_is_left_alone() {
     let mesh = rectangle(1.0, 1.0, 10, 10).unwrap();
     // Edges are 0.1 (axis) and 0.141 (diagonal): a sizing of 0.16 keeps them all under 1 and
     // collapses would make edges ≥ 0.2 > 0.9 · 0.16.
-    let (done, stats) = remesh(&mesh, uniform(&mesh, 0.16), vec![false; mesh.nodes.len()], &[], &limits(0.01)).unwrap();
+    let (done, stats) =
+        remesh(&mesh, uniform(&mesh, 0.16), vec![false; mesh.nodes.len()], &[], &[], &limits(0.01)).unwrap();
     assert_eq!((stats.splits, stats.collapses), (0, 0), "{stats:?}");
     assert_eq!(done.mesh.nodes.len(), mesh.nodes.len());
     for (i, n) in mesh.nodes.iter().enumerate() {
@@ -138,7 +139,7 @@ fn sharp_fold_refines_along_the_fold_only() {
     let p = sizing_params();
     for _ in 0..4 {
         let vs = vertex_metrics(&mesh, &face_metrics(&mesh, &[Some(p.clone())], &[], &[]));
-        let (done, _) = remesh(&mesh, vs, vec![false; mesh.nodes.len()], &[], &limits(p.size_min)).unwrap();
+        let (done, _) = remesh(&mesh, vs, vec![false; mesh.nodes.len()], &[], &[], &limits(p.size_min)).unwrap();
         mesh = done.mesh;
         fold(&mut mesh);
     }
@@ -157,4 +158,32 @@ fn sharp_fold_refines_along_the_fold_only() {
     assert!(!near.is_empty() && !far.is_empty());
     assert!(mean(&far) >= 10.0 * mean(&near), "near {} far {}", mean(&near), mean(&far));
     assert!((total_area(&mesh) - 1.0).abs() < 1e-9);
+}
+
+/// A node split between two nodes of one group joins it (ARCSim's `combine_label`, which
+/// grows a circle handle's ring), one split between different groups or a grouped and an
+/// ungrouped node joins none; groups survive the compaction.
+#[test]
+fn splits_between_nodes_of_a_group_join_it() {
+    let mesh = rectangle(1.0, 1.0, 2, 2).unwrap();
+    // The bottom row (nodes 0, 1, 2) is group 7, node 3 (left, middle row) group 5.
+    let mut groups = vec![0; mesh.nodes.len()];
+    groups[..3].iter_mut().for_each(|g| *g = 7);
+    groups[3] = 5;
+    let fine = vec![Mat2::identity() / (0.2 * 0.2); mesh.verts.len()];
+    let pinned = vec![true; mesh.nodes.len()];
+    let (done, stats) = remesh(&mesh, fine, pinned, &groups, &[], &limits(0.05)).unwrap();
+    assert!(stats.splits > 0);
+    assert_eq!(done.groups.len(), done.mesh.nodes.len());
+    for (old, g) in groups.iter().enumerate() {
+        assert_eq!(done.groups[done.node_map[old].unwrap()], *g, "old node {old}");
+    }
+    for (n, node) in done.mesh.nodes.iter().enumerate() {
+        let on_bottom = node.x.y.abs() < 1e-12;
+        let is_old = done.node_map.contains(&Some(n));
+        if !is_old {
+            assert_eq!(done.groups[n], if on_bottom { 7 } else { 0 }, "new node {n} at {:?}", node.x);
+        }
+    }
+    assert!(done.mesh.nodes.iter().filter(|n| n.x.y.abs() < 1e-12).count() > 3, "the bottom edge was not split");
 }

@@ -16,6 +16,9 @@ pub struct Work {
     pub nalive: Vec<bool>,
     /// Nodes that must survive (handles).
     pub pinned: Vec<bool>,
+    /// A group per node (0: none): a node split between two nodes of one group joins it (the
+    /// rings of circle handles; ARCSim's node labels).
+    pub group: Vec<u32>,
     pub faces: Vec<[usize; 3]>,
     pub fdata: Vec<FaceData>,
     pub falive: Vec<bool>,
@@ -39,6 +42,8 @@ pub struct Finished {
     pub mesh: Mesh,
     pub node_map: Vec<Option<usize>>,
     pub face_shapes: Vec<Mat2>,
+    /// The group of every node of `mesh`.
+    pub groups: Vec<u32>,
 }
 
 impl Work {
@@ -66,6 +71,7 @@ impl Work {
             cloth: mesh.nodes.iter().map(|n| n.cloth).collect(),
             nalive: vec![true; mesh.nodes.len()],
             pinned,
+            group: vec![0; mesh.nodes.len()],
             fdata: (0..mesh.faces.len())
                 .map(|f| FaceData {
                     material: mesh.faces[f].material,
@@ -203,7 +209,8 @@ impl Work {
         }
     }
 
-    pub fn add_node(&mut self, x: Vec3, v: Vec3, cloth: u16) -> usize {
+    pub fn add_node(&mut self, x: Vec3, v: Vec3, cloth: u16, group: u32) -> usize {
+        self.group.push(group);
         self.x.push(x);
         self.v.push(v);
         self.cloth.push(cloth);
@@ -237,9 +244,11 @@ impl Work {
     pub fn finish(&self, old_nodes: usize) -> Result<Finished, MeshError> {
         let mut node_id = vec![usize::MAX; self.x.len()];
         let mut mesh = Mesh::default();
+        let mut groups = Vec::new();
         for i in 0..self.x.len() {
             if self.nalive[i] {
                 node_id[i] = mesh.nodes.len();
+                groups.push(self.group[i]);
                 mesh.nodes.push(Node { x: self.x[i], v: self.v[i], mass: 0.0, cloth: self.cloth[i] });
             }
         }
@@ -259,6 +268,6 @@ impl Work {
         }
         mesh.rebuild_topology()?;
         let node_map = (0..old_nodes).map(|i| (node_id[i] != usize::MAX).then_some(node_id[i])).collect();
-        Ok(Finished { mesh, node_map, face_shapes })
+        Ok(Finished { mesh, node_map, face_shapes, groups })
     }
 }

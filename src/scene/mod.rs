@@ -7,6 +7,7 @@
 //! and the camera. None of those modules imports `scene`.
 
 pub mod arcsim;
+pub mod handle;
 mod load;
 pub mod material;
 mod measured;
@@ -14,6 +15,7 @@ pub mod mot;
 pub mod spec;
 
 pub use arcsim::{load_path, Loaded};
+pub use handle::{Circle, FollowObstacle, Handle, HandleKind};
 pub use load::{check_file, load_file, load_str, load_value, DEFAULT_SCENE, DEFAULT_SCENE_NAME};
 pub use measured::read_measured;
 
@@ -26,7 +28,6 @@ use crate::constraints::LraParams;
 use crate::error::InputError;
 use crate::forces::material::Material;
 use crate::forces::wind::Wind;
-use crate::math::motion::{transform_at, Motion, Transform};
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
 use crate::sizing::{SizingParams, ViewParams};
@@ -98,64 +99,6 @@ pub struct Remesh {
     pub view: ViewParams,
 }
 
-/// Pinned nodes, fixed, following a keyframed motion or following an obstacle, active during
-/// `[start, end)`.
-#[derive(Clone, Debug)]
-pub struct Handle {
-    pub nodes: Vec<usize>,
-    /// Initial world positions of `nodes`; the motion moves these.
-    pub anchors: Vec<Vec3>,
-    pub motion: Option<Motion>,
-    /// Set instead of `motion` when the handle rides on an obstacle.
-    pub follow: Option<FollowObstacle>,
-    pub start: Real,
-    pub end: Real,
-}
-
-/// A handle carried rigidly by an obstacle: anchors move by T(t) ∘ T(0)⁻¹, with T the
-/// obstacle's full local-to-world transform (`Obstacle::transform_at`).
-#[derive(Clone, Debug)]
-pub struct FollowObstacle {
-    /// Index into `Scene::obstacles`.
-    pub obstacle: usize,
-    transform: Transform,
-    motion: Option<Motion>,
-    /// T(0)⁻¹.
-    rest_inverse: Transform,
-}
-
-impl FollowObstacle {
-    /// Follows `obstacles[index]` (a rigid obstacle: not a per-frame sequence).
-    pub fn new(index: usize, obstacle: &Obstacle) -> Self {
-        FollowObstacle {
-            obstacle: index,
-            transform: obstacle.transform,
-            motion: obstacle.motion.clone(),
-            rest_inverse: obstacle.transform_at(0.0).inverse(),
-        }
-    }
-
-    /// The rigid displacement since t = 0: T(t) ∘ T(0)⁻¹.
-    pub fn displacement(&self, t: Real) -> Transform {
-        transform_at(&self.transform, self.motion.as_ref(), t).compose(&self.rest_inverse)
-    }
-}
-
-impl Handle {
-    pub fn active(&self, t: Real) -> bool {
-        t >= self.start && t < self.end
-    }
-
-    /// Target position of the `k`-th node at time `t`.
-    pub fn target(&self, k: usize, t: Real) -> Vec3 {
-        match (&self.follow, &self.motion) {
-            (Some(f), _) => f.displacement(t).apply(&self.anchors[k]),
-            (None, Some(m)) => m.eval(t).apply(&self.anchors[k]),
-            (None, None) => self.anchors[k],
-        }
-    }
-}
-
 /// A validated, runnable scene.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -182,6 +125,31 @@ pub struct Scene {
     pub collision: CollisionParams,
     /// The shot camera, for view-dependent remeshing.
     pub camera: Option<Camera>,
+    /// Stages the scene switches off (`disable`).
+    pub disabled: Disabled,
+}
+
+/// Stages a scene switches off (its `disable` list, ARCSim's names). Remeshing, strain limiting
+/// and long range attachments are switched off at load, by dropping the cloths' `remesh`,
+/// `strain_limits` and `lra`; these are the stages the step itself skips.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Disabled {
+    /// No repulsion contacts (and so no friction) in the implicit solve.
+    pub proximity: bool,
+    /// No implicit solve: the cloth moves only where exact handles, constraints and collisions
+    /// move it.
+    pub physics: bool,
+    /// No continuous collision detection and impact zones.
+    pub collision: bool,
+    /// No pushing cloth back out of obstacles after a remesh.
+    pub separation: bool,
+}
+
+impl Disabled {
+    /// The names `disable` accepts, in the order of a step (ARCSim's module names, with
+    /// `strain_limiting` for its `strainlimiting`).
+    pub const NAMES: [&'static str; 7] =
+        ["proximity", "physics", "strain_limiting", "lra", "collision", "remeshing", "separation"];
 }
 
 impl Scene {

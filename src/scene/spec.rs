@@ -48,6 +48,10 @@ pub struct SceneSpec {
     /// Camera file (relative to the scene) for view-dependent remeshing (`mode: "view"`).
     #[serde(default)]
     pub camera: Option<String>,
+    /// Stages switched off: `proximity`, `physics`, `strain_limiting`, `lra`, `collision`,
+    /// `remeshing`, `separation` (ARCSim's `disable`).
+    #[serde(default)]
+    pub disable: Vec<String>,
 }
 
 #[derive(Deserialize, Debug, Clone, Default)]
@@ -304,6 +308,32 @@ pub struct HandleSpec {
     pub start_time: Option<f64>,
     #[serde(default)]
     pub end_time: Option<f64>,
+    /// Seconds over which a soft handle's strength fades out after `end_time`.
+    #[serde(default)]
+    pub fade_time: Option<f64>,
+    /// Spring stiffness (N/m; a circle's per metre of ring): a soft handle. Absent = exact.
+    #[serde(default)]
+    pub stiffness: Option<f64>,
+    /// Holds the nodes (`nodes` or `region`) on a circle by their material coordinates.
+    #[serde(default)]
+    pub circle: Option<CircleSpec>,
+    /// Two node indices tied together by a spring (needs `stiffness`); instead of `nodes`.
+    #[serde(default)]
+    pub glue: Option<Vec<i64>>,
+}
+
+/// A circle handle's circle (ARCSim's `"type": "circle"`): a node at material coordinate u goes
+/// to center + (axis0 cos θ + axis1 sin θ) · circumference / 2π, θ = 2π (u · u_dir) /
+/// circumference.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct CircleSpec {
+    pub circumference: f64,
+    /// Material direction along the ring.
+    pub u: [f64; 2],
+    pub center: [f64; 3],
+    pub axis0: [f64; 3],
+    pub axis1: [f64; 3],
 }
 
 #[derive(Deserialize, Debug, Clone)]
@@ -381,6 +411,11 @@ pub struct ObstacleSpec {
     /// Motion from a `.mot` file instead of keyframes.
     #[serde(default)]
     pub mot: Option<MotSpec>,
+    /// The obstacle is present from `start_time` to `end_time` (seconds; default always).
+    #[serde(default)]
+    pub start_time: Option<f64>,
+    #[serde(default)]
+    pub end_time: Option<f64>,
 }
 
 #[derive(Deserialize, Debug, Clone)]

@@ -11,6 +11,7 @@ use crate::scene::RemeshMode;
 use crate::sizing::view::face_views;
 use crate::sizing::{face_metrics, vertex_metrics, FaceView, ObstaclePlane, SizingParams};
 
+use super::state::glue_pairs;
 use super::timers::Stage;
 use super::{SimError, Simulation};
 
@@ -55,7 +56,7 @@ impl Simulation {
         let range = OBSTACLE_RANGE * world.params.thickness;
         let x = self.state.mesh.positions();
         let mut best: Vec<Option<(Real, ObstaclePlane)>> = vec![None; x.len()];
-        for b in 0..world.bodies.len() {
+        for b in (0..world.bodies.len()).filter(|&b| world.present(b, self.state.time)) {
             for (i, hit) in world.with_sdf(b, self.state.time, |sdf| sdf.query_all(&x)).into_iter().enumerate() {
                 let Some(hit) = hit else { continue };
                 let d = hit.distance.abs();
@@ -116,12 +117,13 @@ impl Simulation {
         let aspect_min = params.iter().flatten().map(|p| p.aspect_min).fold(1.0, Real::min);
         let limits = RemeshLimits { size_min, aspect_min, coarsen: mode.is_adaptive() };
         let preserved = self.preserved_nodes(&params);
+        let groups = self.circle_groups();
         // A flat rest shape (every angle zero) stays flat without carrying it.
         let shapes = match self.state.rest_angles.iter().any(|&a| a != 0.0) {
             true => face_shapes(&self.state.mesh, &self.state.rest_angles),
             false => Vec::new(),
         };
-        let (finished, stats) = remesh(&self.state.mesh, vsize, preserved, &shapes, &limits)
+        let (finished, stats) = remesh(&self.state.mesh, vsize, preserved, &groups, &shapes, &limits)
             .map_err(|e| SimError::Mesh(format!("remeshing failed: {e}")))?;
         if stats.splits + stats.collapses + stats.flips > 0 {
             self.adopt(finished)?;
@@ -130,12 +132,13 @@ impl Simulation {
         Ok(stats)
     }
 
-    /// Takes a remeshed mesh: handles renumbered, rest angles solved from the rest shape the
-    /// faces carried through the remesh (`remesh::rest_shape`; all zero for a flat rest shape),
-    /// masses and rest data rebuilt, the implicit system's new pattern left for the next step
-    /// to analyse.
+    /// Takes a remeshed mesh: handles renumbered (circle rings: the nodes of their group), rest
+    /// angles solved from the rest shape the faces carried through the remesh
+    /// (`remesh::rest_shape`; all zero for a flat rest shape), masses and rest data rebuilt, the
+    /// implicit system's new pattern left for the next step to analyse, cloth pushed back out of
+    /// obstacles (the `separation` stage, unless switched off).
     fn adopt(&mut self, finished: Finished) -> Result<(), SimError> {
-        let Finished { mesh, node_map, face_shapes } = finished;
+        let Finished { mesh, node_map, face_shapes, groups } = finished;
         let state = &mut self.state;
         let curved = state.rest_angles.iter().any(|&a| a != 0.0);
         for n in state.handle_nodes.iter_mut().flatten() {
@@ -148,11 +151,17 @@ impl Simulation {
             true => edge_angles_from_shapes(&state.mesh, &face_shapes),
             false => vec![0.0; state.mesh.edges.len()],
         };
-        state.extra_pairs.clear();
         state.stuck.clear();
+        if !groups.iter().all(|&g| g == 0) {
+            self.rings_remeshed(&groups);
+        }
+        let state = &mut self.state;
+        state.extra_pairs = glue_pairs(&self.scene, &state.handle_nodes);
         self.ws.remeshed(state)?;
         self.constraints_remeshed();
-        self.push_out(None)?;
+        if !self.scene.disabled.separation {
+            self.push_out(None)?;
+        }
         Ok(())
     }
 }

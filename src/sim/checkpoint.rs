@@ -3,8 +3,9 @@
 //!
 //! What is stored is the `SimState` (`state.rs`): the mesh (material coordinates, node
 //! positions, velocities, masses; the faces, from which edges are re-derived in the same
-//! deterministic order), the rest dihedral angles, the handles' node ids, the cloth–cloth pairs
-//! added to the system's sparsity pattern, time, step and frame counters. The `Workspace` is
+//! deterministic order), the rest dihedral angles, the handles' node ids and switch-ons (when,
+//! and where their nodes were), the node pairs added to the system's sparsity pattern, time,
+//! step and frame counters. The `Workspace` is
 //! rebuilt from it and the scene.
 //!
 //! Format (little endian): `VCLOTHCK`, format version (u32), the run record, the state, the run
@@ -19,10 +20,11 @@ use crate::math::{Vec2, Vec3};
 use crate::mesh::{Face, Mesh, Node, NodeId, Vert, VertId};
 use crate::scene::{RemeshMode, Scene};
 
+use super::state::HandleOn;
 use super::SimState;
 
 const MAGIC: &[u8; 8] = b"VCLOTHCK";
-const FORMAT_VERSION: u32 = 4;
+const FORMAT_VERSION: u32 = 5;
 /// File names: `checkpoint_<frame>.bin`.
 const PREFIX: &str = "checkpoint_";
 const SUFFIX: &str = ".bin";
@@ -190,6 +192,18 @@ pub fn encode(run: &RunRecord, st: &SimState, stats: &RunStats) -> Vec<u8> {
         w.usize(h.len());
         h.iter().for_each(|&n| w.usize(n));
     }
+    w.usize(st.handle_on.len());
+    for on in &st.handle_on {
+        match on {
+            None => w.u8(0),
+            Some(on) => {
+                w.u8(1);
+                w.f64(on.time);
+                w.usize(on.x.len());
+                on.x.iter().flat_map(|p| p.iter()).for_each(|&c| w.f64(c));
+            }
+        }
+    }
     w.usize(st.extra_pairs.len());
     for &(i, j) in &st.extra_pairs {
         w.usize(i);
@@ -290,6 +304,20 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
         let k = r.count(8)?;
         handle_nodes.push((0..k).map(|_| r.usize()).collect::<Result<Vec<_>, _>>()?);
     }
+    let non = r.count(1)?;
+    let mut handle_on = Vec::with_capacity(non);
+    for _ in 0..non {
+        handle_on.push(match r.u8()? {
+            0 => None,
+            1 => {
+                let time = r.f64()?;
+                let k = r.count(24)?;
+                let x = (0..k).map(|_| Ok(Vec3::new(r.f64()?, r.f64()?, r.f64()?))).collect::<Result<_, String>>()?;
+                Some(HandleOn { time, x })
+            }
+            _ => return Err("bad handle switch-on flag".into()),
+        });
+    }
     let np = r.count(16)?;
     let extra_pairs = (0..np).map(|_| Ok((r.usize()?, r.usize()?))).collect::<Result<Vec<_>, String>>()?;
     let ns = r.count(32)?;
@@ -299,7 +327,8 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
     if r.pos != body.len() {
         return Err("trailing bytes".into());
     }
-    let state = SimState { frame, steps, time, pushed_out, mesh, rest_angles, handle_nodes, extra_pairs, stuck };
+    let state =
+        SimState { frame, steps, time, pushed_out, mesh, rest_angles, handle_nodes, handle_on, extra_pairs, stuck };
     Ok(Checkpoint { run, state, stats })
 }
 
@@ -389,6 +418,7 @@ mod tests {
             mesh: crate::mesh::rectangle(1.0, 1.0, 2, 2).unwrap(),
             rest_angles: vec![0.0; 16],
             handle_nodes: vec![vec![0, 2]],
+            handle_on: vec![Some(HandleOn { time: 0.5, x: vec![Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.0, -1.0, 0.5)] })],
             extra_pairs: vec![(3, 1)],
             stuck: vec![[0, 1, 2, 9]],
         };
@@ -410,6 +440,7 @@ mod tests {
         assert_eq!(back.state.time.to_bits(), st.time.to_bits());
         assert_eq!(back.state.mesh.nodes.len(), st.mesh.nodes.len());
         assert_eq!(back.state.extra_pairs, st.extra_pairs);
+        assert_eq!(back.state.handle_on, st.handle_on);
         assert_eq!(back.state.stuck, st.stuck);
         for cut in [0, 8, 20, bytes.len() / 2, bytes.len() - 1] {
             assert!(decode(&bytes[..cut]).is_err(), "truncated at {cut} accepted");

@@ -10,11 +10,11 @@
 //!   to their end-of-step positions first, which is where all their work is done (their contact
 //!   penalties are frozen at those positions); the free nodes' motion is then one backward-Euler
 //!   step, which dissipates. So the energy change of the free motion,
-//!   ΔE = ΔK_free + ΔP_free + U(x̂) − U(x̃) + C(x̂) − C(x̃)
+//!   ΔE = ΔK_free + ΔP_free + U(x̂) − U(x̃) + C(x̂) − C(x̃) + S(x̂) − S(x̃)
 //!   (x̃: start positions with handles on their targets, x̂: solved positions, U elastic, C
-//!   repulsion, P gravity), may exceed the work W of the wind and of friction (positive where a
+//!   repulsion, S the soft handles' springs at their end-of-step targets, P gravity), may exceed the work W of the wind and of friction (positive where a
 //!   moving obstacle drags the cloth; `Friction::work`) only by
-//!   `ENERGY_TOLERANCE` × (K₀ + U₀ + C(x̃) + W) + a floor of the cloth's mass dropping
+//!   `ENERGY_TOLERANCE` × (K₀ + U₀ + C(x̃) + S(x̃) + W) + a floor of the cloth's mass dropping
 //!   `FLOOR_DROP` and moving at `FLOOR_SPEED`. One linearised Newton step that misses the
 //!   stretch of a large rotation (drape_stiff at h = 1/24: 1.5 J → 120 J in one step with fixed
 //!   handles) fails this by orders of magnitude.
@@ -36,6 +36,7 @@
 use rayon::prelude::*;
 
 use crate::collision::proximity::Contact;
+use crate::forces::handle::Spring;
 use crate::forces::material::Material;
 use crate::forces::membrane::{deformation_gradient, max_principal_strain};
 use crate::forces::wind::{wind_face, Wind};
@@ -136,6 +137,8 @@ pub struct StepContext<'a> {
     pub x0: &'a [Vec3],
     /// Handle nodes' prescribed velocities.
     pub pinned: &'a [Option<Vec3>],
+    /// Soft handles' springs (targets at the step's end).
+    pub springs: &'a [Spring],
     /// The step's frozen repulsion contacts, and the obstacle nodes at the step's end.
     pub contacts: &'a [Contact],
     pub fixed: &'a [Vec3],
@@ -221,11 +224,13 @@ pub fn after_solve(c: &StepContext, v: Vec<Vec3>) -> Result<Solved, Fault> {
     let u1 = c.elastic.energy_at(&x1);
     let k1: Real = nodes.iter().zip(&v).map(|(n, v)| 0.5 * n.mass * v.norm_squared()).sum();
     let (ct, c1) = (contact_energy(c, &xt), contact_energy(c, &x1));
+    let spring_energy = |x: &[Vec3]| c.springs.iter().map(|s| s.energy(x)).sum::<Real>();
+    let (st, s1) = (spring_energy(&xt), spring_energy(&x1));
     let work = wind_work(c, &x1, &v) + c.friction_work;
-    let gain = dk + dp + (u1 - ut) + (c1 - ct);
+    let gain = dk + dp + (u1 - ut) + (c1 - ct) + (s1 - st);
     let mass: Real = nodes.iter().map(|n| n.mass).sum();
     let floor = mass * (g.norm() * FLOOR_DROP + 0.5 * FLOOR_SPEED * FLOOR_SPEED);
-    let budget = work + ENERGY_TOLERANCE * (k0 + c.u0 + ct + work) + floor;
+    let budget = work + ENERGY_TOLERANCE * (k0 + c.u0 + ct + st + work) + floor;
     if gain > budget || !gain.is_finite() {
         return Err(Fault::EnergyGain { gain, budget });
     }

@@ -11,7 +11,7 @@ use crate::constraints::lra::{islands, Attachment, Lra, LraParams};
 use crate::constraints::strain_limit::{faces_at_limit, StrainLimiter, TOLERANCE};
 use crate::io::stats::{FrameStats, LraFrameStats, StrainLimitFrameStats};
 use crate::math::{Real, Vec3};
-use crate::scene::Scene;
+use crate::scene::{HandleKind, Scene};
 
 use super::state::SimState;
 use super::timers::Stage;
@@ -85,8 +85,10 @@ impl Constraints {
 }
 
 impl LraStage {
+    /// The handles that attach at `time`: active ones that hold nodes on targets (a glue pair
+    /// holds no node in place).
     fn active_handles(scene: &Scene, time: Real) -> Vec<bool> {
-        scene.handles.iter().map(|h| h.active(time)).collect()
+        scene.handles.iter().map(|h| h.active(time) && h.kind != HandleKind::Glue).collect()
     }
 
     /// The constraints of the state's mesh to the nodes of the handles active now.
@@ -99,8 +101,10 @@ impl LraStage {
                 continue;
             }
             for (k, &node) in nodes.iter().enumerate() {
+                // A circle's ring grows by splits of its own edges: its new nodes join its island.
+                let island = self.islands[h].get(k).or(self.islands[h].first()).copied().unwrap_or(0);
                 if !std::mem::replace(&mut seen[node], true) {
-                    attachments.push(Attachment { node, island: self.islands[h][k] });
+                    attachments.push(Attachment { node, island });
                 }
             }
         }
@@ -118,7 +122,7 @@ impl Simulation {
     }
 
     /// The constraint stages on a step's end positions `x` (from `x0` over `h`), before
-    /// collision handling; nodes moved get v = (x − x₀)/h. `inv_mass` is 0 for pinned nodes.
+    /// collision handling; nodes moved get v = (x − x₀)/h. `inv_mass` is 0 for nodes held by handles.
     pub(super) fn constrain(&mut self, x0: &[Vec3], inv_mass: &[Real], h: Real, x: &mut [Vec3], v: &mut [Vec3]) {
         let Some(mut c) = self.ws.constraints.take() else { return };
         let mut moved = vec![false; x.len()];

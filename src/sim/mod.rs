@@ -7,6 +7,7 @@ mod adapt;
 pub mod checkpoint;
 pub mod checks;
 pub mod constrain;
+mod handles;
 pub mod interrupt;
 pub mod output;
 pub mod progress;
@@ -110,7 +111,7 @@ impl Simulation {
         let th = world.params.thickness;
         let tol = tolerance.unwrap_or(Real::INFINITY);
         let mut pushed = 0;
-        for b in 0..world.bodies.len() {
+        for b in (0..world.bodies.len()).filter(|&b| world.present(b, self.state.time)) {
             let mut too_deep = vec![0usize; self.scene.cloths.len()];
             let mut moves = Vec::new();
             let inside = world.with_sdf(b, self.state.time, |sdf| sdf.query_inside(&self.state.mesh.positions()));
@@ -150,6 +151,7 @@ impl Simulation {
         let Some(world) = &self.ws.collisions else { return 0 };
         let x = self.state.mesh.positions();
         (0..world.bodies.len())
+            .filter(|&b| world.present(b, self.state.time))
             .map(|b| world.with_sdf(b, self.state.time, |sdf| sdf.count_deeper_than(&x, 0.5 * world.params.thickness)))
             .sum()
     }
@@ -161,7 +163,7 @@ impl Simulation {
         let x = m.positions();
         let tris: Vec<[usize; 3]> = (0..m.faces.len()).map(|f| m.face_nodes(f)).collect();
         let (mut obs_x, mut obs_tris) = (Vec::new(), Vec::new());
-        for body in self.ws.collisions.iter().flat_map(|w| &w.bodies) {
+        for body in self.ws.collisions.iter().flat_map(|w| &w.bodies).filter(|b| b.present_at(self.state.time)) {
             let base = obs_x.len();
             obs_x.extend(body.positions_at(self.state.time));
             obs_tris.extend(body.triangles().iter().map(|t| t.map(|i| i + base)));

@@ -70,7 +70,10 @@ impl Output<'_> {
             if let Some(world) = &sim.ws.collisions {
                 for (body, obstacle) in world.bodies.iter().zip(&sim.scene.obstacles) {
                     let positions = body.positions_at(sim.state.time);
-                    if self.format.obj() {
+                    // An obstacle outside its window has no OBJ that frame (readers skip missing
+                    // files) and is invisible in USD.
+                    let present = body.present_at(sim.state.time);
+                    if self.format.obj() && present {
                         let name = format!("obstacle_{}_{number:0w$}.obj", file_safe(&obstacle.name), w = self.digits);
                         let path = self.dir.join(name);
                         let text = obstacle_obj(&positions, body.triangles());
@@ -78,7 +81,8 @@ impl Output<'_> {
                     }
                     let velocities = (!body.is_static()).then(|| obstacle_velocities(body, sim));
                     let triangles = body.triangles();
-                    obstacles.push(ObstacleFrame { name: &obstacle.name, positions, velocities, triangles });
+                    let visible = body.has_window().then_some(present);
+                    obstacles.push(ObstacleFrame { name: &obstacle.name, positions, velocities, triangles, visible });
                 }
             }
         }

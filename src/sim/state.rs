@@ -1,9 +1,9 @@
 //! The simulation state: everything a checkpoint holds, from which the rest of a run (the
 //! `Workspace`) is rebuilt. Together with the scene it determines every later frame bit for bit.
 
-use crate::math::Real;
+use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
-use crate::scene::Scene;
+use crate::scene::{HandleKind, Scene};
 
 use super::SimError;
 
@@ -26,11 +26,16 @@ pub struct SimState {
     pub mesh: Mesh,
     /// Rest dihedral angle of each edge of `mesh`.
     pub rest_angles: Vec<Real>,
-    /// The nodes of each of the scene's handles in `mesh` (remeshing renumbers them; the
-    /// scene's own `Handle::nodes` index its input mesh).
+    /// The nodes of each of the scene's handles in `mesh` (remeshing renumbers them, and adds
+    /// to a circle's ring the nodes it splits between two of its nodes; the scene's own
+    /// `Handle::nodes` index its input mesh).
     pub handle_nodes: Vec<Vec<usize>>,
-    /// Cloth–cloth node pairs (i > j) added to the system's sparsity pattern for self contacts
-    /// (they change the fill-reducing ordering, hence the rounding of the solve).
+    /// Per handle, once it has switched on: when, and where its nodes were then (node handles;
+    /// empty for circles and glue). Their targets are carried from there (`scene::handle`).
+    pub handle_on: Vec<Option<HandleOn>>,
+    /// Node pairs (i > j) added to the system's sparsity pattern: glue handles, and cloth–cloth
+    /// pairs of self contacts (they change the fill-reducing ordering, hence the rounding of
+    /// the solve).
     pub extra_pairs: Vec<(usize, usize)>,
     /// Participants of the friction contacts that stuck at the last step, sorted: the next
     /// step's first guess of their mode (`collision::friction`).
@@ -49,9 +54,20 @@ impl SimState {
             time: scene.start_time(),
             pushed_out: 0,
             handle_nodes: scene.handles.iter().map(|h| h.nodes.clone()).collect(),
+            // Handles on from the run's start anchor the initial positions then.
+            handle_on: scene
+                .handles
+                .iter()
+                .map(|h| {
+                    (h.start <= h.anchor_time).then(|| HandleOn {
+                        time: h.anchor_time,
+                        x: if h.kind == HandleKind::Nodes { h.anchors.clone() } else { Vec::new() },
+                    })
+                })
+                .collect(),
             rest_angles,
+            extra_pairs: glue_pairs(scene, &scene.handles.iter().map(|h| h.nodes.clone()).collect::<Vec<_>>()),
             mesh,
-            extra_pairs: Vec::new(),
             stuck: Vec::new(),
         }
     }
@@ -65,8 +81,19 @@ impl SimState {
         }
         let n = self.mesh.nodes.len();
         for (h, nodes) in scene.handles.iter().zip(&self.handle_nodes) {
-            if nodes.len() != h.nodes.len() || nodes.iter().any(|&k| k >= n) {
+            // A circle's ring grows as the remesher splits it.
+            let count_ok = matches!(h.kind, HandleKind::Circle(_)) || nodes.len() == h.nodes.len();
+            if !count_ok || nodes.iter().any(|&k| k >= n) {
                 return Err(bad("handle nodes".into()));
+            }
+        }
+        if self.handle_on.len() != scene.handles.len() {
+            return Err(bad(format!("{} handle switch-ons, {} handles", self.handle_on.len(), scene.handles.len())));
+        }
+        for (h, on) in scene.handles.iter().zip(&self.handle_on) {
+            let expected = if h.kind == HandleKind::Nodes { h.nodes.len() } else { 0 };
+            if on.as_ref().is_some_and(|on| on.x.len() != expected) {
+                return Err(bad("handle anchors".into()));
             }
         }
         if self.mesh.nodes.iter().any(|n| n.cloth as usize >= scene.cloths.len())
@@ -88,4 +115,27 @@ impl SimState {
         }
         Ok(self)
     }
+}
+
+/// When a handle switched on and where its nodes were then.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HandleOn {
+    pub time: Real,
+    /// Per node of a node handle, its position at `time`.
+    pub x: Vec<Vec3>,
+}
+
+/// The node pairs (larger first, sorted) of the scene's glue handles, `handle_nodes` being
+/// their nodes in the current mesh: their couplings must be in the system's pattern.
+pub fn glue_pairs(scene: &Scene, handle_nodes: &[Vec<usize>]) -> Vec<(usize, usize)> {
+    let mut pairs: Vec<(usize, usize)> = scene
+        .handles
+        .iter()
+        .zip(handle_nodes)
+        .filter(|(h, _)| h.kind == HandleKind::Glue)
+        .map(|(_, n)| (n[0].max(n[1]), n[0].min(n[1])))
+        .collect();
+    pairs.sort_unstable();
+    pairs.dedup();
+    pairs
 }

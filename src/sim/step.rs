@@ -1,19 +1,23 @@
 //! One time step as a list of named, timed stages (DESIGN.md "Pipeline of one time step", after
 //! ARCSim's `advance_step`): handles → proximity → assembly / factorisation / solve →
 //! integration → collision, with Coulomb friction inside the solve (`collision::friction`) and the
-//! fault checks of `checks.rs` after the solve and at the end. A stage the scene does not need does not run. An attempt whose result fails a
-//! check is not committed; `Simulation::step` (`recover.rs`) retries it in halves.
+//! fault checks of `checks.rs` after the solve and at the end. A stage the scene does not need
+//! does not run, nor one it switches off (`disable`: proximity, physics, collision). An attempt
+//! whose result fails a check is not committed; `Simulation::step` (`recover.rs`) retries it in
+//! halves.
 
 use std::time::Instant;
 
 use crate::collision::friction::{self, Budget, Change, Friction, FrictionContact, FrictionFrame};
 use crate::collision::proximity::Contact;
 use crate::collision::speculative::Speculative;
+use crate::forces::handle::Spring;
 use crate::math::{Real, Vec3};
 use crate::scene::RemeshMode;
 use crate::solver::{SolveError, SolveTiming, StepInput};
 
 use super::checks::{self, Elastic, StepContext};
+use super::handles::Held;
 use super::recover::{Fault, StepFault};
 use super::timers::Stage;
 use super::{SimError, Simulation};
@@ -45,14 +49,21 @@ fn friction_contacts<'a>(
 /// What an attempt has fixed before its checks: the step, its start and its contacts.
 struct StepData {
     h: Real,
-    t1: Real,
     /// Start positions.
     x0: Vec<Vec3>,
     /// Per node: the handle's prescribed velocity over the step.
     pinned: Vec<Option<Vec3>>,
+    /// The exact handles' targets (node, position at the step's end).
+    exact: Vec<(usize, Vec3)>,
+    /// The soft handles' springs.
+    springs: Vec<Spring>,
     contacts: Vec<Contact>,
     /// 0 for pinned nodes and massless ones (they do not move in projections).
     inv_mass: Vec<Real>,
+    /// `inv_mass`, with 0 also for the nodes soft handles pull to a target: the constraint
+    /// stages keep them where the solve put them (ARCSim's strain limiting keeps every handle
+    /// constraint's value, `strainlimiting.cpp`); collisions move them like free nodes.
+    held_inv_mass: Vec<Real>,
     /// Elastic energy at the start (from the assembly).
     u0: Real,
     /// The work friction may do on the cloth over the step (a moving obstacle's drag).
@@ -110,19 +121,31 @@ impl Simulation {
     /// such as the contact pattern may have grown). With `accept_unresolved`, collisions left
     /// at the impact-zone iteration cap do not fail the attempt (the last, smallest retry).
     pub(super) fn attempt(&mut self, h: Real, t1: Real, accept_unresolved: bool) -> Result<(), StepFault> {
-        let pinned = self.timed(Stage::Handles, |s| s.pinned_velocities(t1, h));
+        let held = self.timed(Stage::Handles, |s| {
+            s.switch_on_handles();
+            s.held(t1)
+        })?;
+        let pinned = self.pinned_velocities(&held.exact, h);
         let contacts = match self.ws.collisions.is_some() {
-            true => self.timed(Stage::Proximity, |s| s.proximity(t1)),
+            true if !self.scene.disabled.proximity => self.timed(Stage::Proximity, |s| s.proximity(t1)),
+            true => {
+                let t0 = self.state.time;
+                self.ws.collisions.iter_mut().for_each(|w| w.advance(t0, t1));
+                Vec::new()
+            }
             false => Vec::new(),
         };
         self.timed(Stage::Factorisation, |s| s.ws.pattern_for_step(&mut s.state, &contacts))?;
-        let out = self.implicit_solve(h, &pinned, &contacts)?;
-        let (step, v) = self.timed(Stage::Integration, |s| s.step_data(h, t1, pinned, contacts, &out));
+        let out = match self.scene.disabled.physics {
+            false => self.implicit_solve(h, &pinned, &held.springs, &contacts)?,
+            true => self.still(),
+        };
+        let (step, v) = self.timed(Stage::Integration, |s| s.step_data(h, pinned, held, contacts, &out));
         let solved = self.timed(Stage::FaultChecks, |s| checks::after_solve(&s.context(&step), v))?;
         let mut v = solved.v.clone();
         let mut x = self.timed(Stage::Integration, |s| s.end_positions(&step, &v));
-        self.constrain(&step.x0, &step.inv_mass, step.h, &mut x, &mut v);
-        if self.ws.collisions.is_some() {
+        self.constrain(&step.x0, &step.held_inv_mass, step.h, &mut x, &mut v);
+        if self.ws.collisions.is_some() && !self.scene.disabled.collision {
             let capped = self.timed(Stage::Collision, |s| s.resolve_collisions(&step, &mut x, &mut v));
             if capped && !accept_unresolved {
                 return Err(StepFault::Retry(Fault::Collisions));
@@ -133,17 +156,22 @@ impl Simulation {
         Ok(())
     }
 
-    /// Target velocity of every node held by an active handle at the end of a step to `t1`.
-    fn pinned_velocities(&self, t1: Real, h: Real) -> Vec<Option<Vec3>> {
+    /// The velocity over the step of length `h` that takes every node an exact handle holds
+    /// onto its target.
+    fn pinned_velocities(&self, exact: &[(usize, Vec3)], h: Real) -> Vec<Option<Vec3>> {
         let mut pinned = vec![None; self.state.mesh.nodes.len()];
-        for (handle, nodes) in self.scene.handles.iter().zip(&self.state.handle_nodes) {
-            if handle.active(self.state.time) {
-                for (k, &n) in nodes.iter().enumerate() {
-                    pinned[n] = Some((handle.target(k, t1) - self.state.mesh.nodes[n].x) / h);
-                }
-            }
+        for &(n, target) in exact {
+            pinned[n] = Some((target - self.state.mesh.nodes[n].x) / h);
         }
         pinned
+    }
+
+    /// The physics stage switched off (`disable: ["physics"]`): no forces, no solve; the cloth
+    /// stands still unless exact handles, constraints or collisions move it.
+    fn still(&self) -> Implicit {
+        let x0 = self.state.mesh.positions();
+        let v = vec![Vec3::zeros(); x0.len()];
+        Implicit { v, u0: self.elastic().energy_at(&x0), friction_work: 0.0, stuck: Vec::new() }
     }
 
     /// Moves the obstacles to the step and finds the repulsion contacts.
@@ -164,6 +192,7 @@ impl Simulation {
         &mut self,
         h: Real,
         pinned: &[Option<Vec3>],
+        springs: &[Spring],
         contacts: &[Contact],
     ) -> Result<Implicit, StepFault> {
         let nodes = &self.state.mesh.nodes;
@@ -202,6 +231,7 @@ impl Simulation {
             gravity: self.scene.gravity,
             wind: self.scene.wind.as_ref(),
             pinned,
+            springs,
             contacts,
             fixed,
         };
@@ -275,25 +305,46 @@ impl Simulation {
     fn step_data(
         &self,
         h: Real,
-        t1: Real,
         pinned: Vec<Option<Vec3>>,
+        held: Held,
         contacts: Vec<Contact>,
         out: &Implicit,
     ) -> (StepData, Vec<Vec3>) {
         let nodes = &self.state.mesh.nodes;
         let v: Vec<Vec3> = out.v.iter().zip(&pinned).map(|(v, p)| p.unwrap_or(*v)).collect();
-        let inv_mass = nodes
+        let inv_mass: Vec<Real> = nodes
             .iter()
             .zip(&pinned)
             .map(|(n, p)| if p.is_some() || n.mass <= 0.0 { 0.0 } else { 1.0 / n.mass })
             .collect();
+        let mut held_inv_mass = inv_mass.clone();
+        for s in &held.springs {
+            if let Spring::Anchor { node, .. } = s {
+                held_inv_mass[*node] = 0.0;
+            }
+        }
         let obstacle_speed = match &self.ws.collisions {
             Some(w) => w.obstacle_velocities(h).iter().map(|v| v.norm()).fold(0.0, Real::max),
             None => 0.0,
         };
         let x0 = self.state.mesh.positions();
         let (u0, friction_work, stuck) = (out.u0, out.friction_work, out.stuck.clone());
-        (StepData { h, t1, x0, pinned, contacts, inv_mass, u0, friction_work, stuck, obstacle_speed }, v)
+        let Held { exact, springs } = held;
+        let step = StepData {
+            h,
+            x0,
+            pinned,
+            exact,
+            springs,
+            contacts,
+            inv_mass,
+            held_inv_mass,
+            u0,
+            friction_work,
+            stuck,
+            obstacle_speed,
+        };
+        (step, v)
     }
 
     /// What the fault checks judge the step by.
@@ -306,6 +357,7 @@ impl Simulation {
             h: step.h,
             x0: &step.x0,
             pinned: &step.pinned,
+            springs: &step.springs,
             contacts: &step.contacts,
             fixed: world.map(|w| w.obs_x1.as_slice()).unwrap_or(&[]),
             thickness: world.map_or(0.0, |w| w.params.thickness),
@@ -315,15 +367,11 @@ impl Simulation {
         }
     }
 
-    /// x₁ = x₀ + h v, with handle nodes exactly on their targets (no rounding drift).
+    /// x₁ = x₀ + h v, with exact handles' nodes exactly on their targets (no rounding drift).
     fn end_positions(&self, step: &StepData, v: &[Vec3]) -> Vec<Vec3> {
         let mut x: Vec<Vec3> = step.x0.iter().zip(v).map(|(x, v)| x + step.h * v).collect();
-        for (handle, nodes) in self.scene.handles.iter().zip(&self.state.handle_nodes) {
-            if handle.active(self.state.time) {
-                for (k, &n) in nodes.iter().enumerate() {
-                    x[n] = handle.target(k, step.t1);
-                }
-            }
+        for &(n, target) in &step.exact {
+            x[n] = target;
         }
         x
     }

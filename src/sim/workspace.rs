@@ -72,7 +72,7 @@ impl Workspace {
         self.rest = rest_state(&state.mesh, &state.rest_angles)
             .map_err(|f| SimError::Mesh(format!("remeshing left face {f} degenerate")))?;
         self.node_area = node_areas(&state.mesh, &self.rest);
-        self.pending_pattern = Some(BlockPattern::new(&state.mesh, &self.rest.hinges, &[]));
+        self.pending_pattern = Some(BlockPattern::new(&state.mesh, &self.rest.hinges, &state.extra_pairs));
         Ok(())
     }
 

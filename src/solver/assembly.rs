@@ -7,6 +7,7 @@ use rayon::prelude::*;
 
 use crate::collision::friction::FrictionTerm;
 use crate::collision::proximity::{repulsion, Contact};
+use crate::forces::handle::{anchor_spring, glue_spring, Spring};
 use crate::forces::material::Material;
 use crate::forces::wind::{wind_face, Wind};
 use crate::forces::{Projection, RestState};
@@ -32,6 +33,8 @@ pub struct StepInput<'a> {
     pub wind: Option<&'a Wind>,
     /// For each node: `Some(v)` if its velocity at the end of the step is prescribed.
     pub pinned: &'a [Option<Vec3>],
+    /// Soft handles' springs, their targets at the step's end.
+    pub springs: &'a [Spring],
     /// Repulsion contacts (collision proximity), frozen for the step.
     pub contacts: &'a [Contact],
     /// Positions of the fixed points (obstacle vertices) that contacts index past the nodes.
@@ -196,7 +199,47 @@ impl ImplicitSystem {
             }
         }
         self.add_contacts(inp);
+        self.add_springs(inp);
         energy
+    }
+
+    /// Soft handles enter like elastic elements without damping (ARCSim's
+    /// `add_constraint_forces`): A += h² ∇²E, b += −h (∇E + h ∇²E v).
+    fn add_springs(&mut self, inp: &StepInput) {
+        let h = inp.h;
+        let nodes = &inp.mesh.nodes;
+        for spring in inp.springs {
+            match *spring {
+                Spring::Anchor { node, target, k } => {
+                    let (_, grad, hess) = anchor_spring(&nodes[node].x, &target, k);
+                    self.rhs[node] -= h * (grad + h * (hess * nodes[node].v));
+                    self.blocks[self.pattern.col_start[node]] += h * h * hess;
+                }
+                Spring::Glue { nodes: [a, b], k } => {
+                    let (_, grad, hess) = glue_spring(&nodes[a].x, &nodes[b].x, k);
+                    let mut vl = nalgebra::SVector::<Real, 6>::zeros();
+                    vl.fixed_rows_mut::<3>(0).copy_from(&nodes[a].v);
+                    vl.fixed_rows_mut::<3>(3).copy_from(&nodes[b].v);
+                    let rhs = -h * (grad + h * (hess * vl));
+                    self.rhs[a] += rhs.fixed_rows::<3>(0);
+                    self.rhs[b] += rhs.fixed_rows::<3>(3);
+                    let kk = h * h * k * Mat3::identity();
+                    // The pair's coupling is in the pattern (`SimState::extra_pairs` holds glue
+                    // pairs); were it missing, 2 k I on each diagonal majorizes the spring, as
+                    // for contacts (`add_contacts`).
+                    let (hi, lo) = (a.max(b), a.min(b));
+                    let (diag, off) = match self.pattern.block(hi, lo) {
+                        Some(s) => (kk, Some(s)),
+                        None => (2.0 * kk, None),
+                    };
+                    self.blocks[self.pattern.col_start[a]] += diag;
+                    self.blocks[self.pattern.col_start[b]] += diag;
+                    if let Some(s) = off {
+                        self.blocks[s] -= kk;
+                    }
+                }
+            }
+        }
     }
 
     /// Repulsion contacts enter like elastic elements (without damping):

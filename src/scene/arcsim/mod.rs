@@ -62,8 +62,23 @@ pub fn load_path(path: &Path, base: Option<&Path>) -> Res<Loaded> {
         path,
         Path::new(""),
         &stem,
-    )?;
+    )
+    .map_err(|e| in_conf_terms(e, path, &converted))?;
     Ok(Loaded { scene, warnings: converted.warnings })
+}
+
+/// An error the scene loader found in the converted scene of the conf at `path`, located in
+/// the conf where the conversion knows where the field came from, else named as a field of
+/// the converted scene (`viewcloth convert` writes it).
+fn in_conf_terms(e: InputError, path: &Path, converted: &Converted) -> InputError {
+    if e.file != path {
+        return e; // a mesh or material file: its own location
+    }
+    let location = e.location.map(|loc| match converted.conf_location(&loc) {
+        Some(conf) => conf,
+        None => format!("{loc} (of the converted scene)"),
+    });
+    InputError { location, ..e }
 }
 
 /// Converts the conf at `path` into viewcloth scene JSON whose paths are relative to the

@@ -4,11 +4,10 @@
 use std::path::{Path, PathBuf};
 
 use super::material::resolve;
-use super::spec::{ClothSpec, CollisionSpec, HandleSpec, KeyframeSpec, MotSpec, SceneSpec, TransformSpec};
-use super::{Cloth, FollowObstacle, Handle, Scene};
+use super::spec::{ClothSpec, CollisionSpec, KeyframeSpec, MotSpec, SceneSpec, TransformSpec};
+use super::{Cloth, Disabled, Scene};
 use crate::camera::Camera;
 use crate::collision::params::CollisionParams;
-use crate::collision::shape::{Obstacle, ObstacleShape};
 use crate::error::InputError;
 use crate::forces::wind::Wind;
 use crate::io::obj::{read_obj, ObjData};
@@ -21,9 +20,11 @@ pub const DEFAULT_SCENE: &str = include_str!("../../../scenes/hanging_sheet.json
 pub const DEFAULT_SCENE_NAME: &str = "hanging_sheet";
 
 mod constraints;
+mod handle;
 mod obstacle;
 mod remesh;
 use constraints::{lra_params, strain_limits};
+use handle::load_handle;
 use obstacle::load_obstacle;
 use remesh::remesh_params;
 
@@ -156,6 +157,14 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
             Some(rel) => Some(Camera::load(&ctx.resolve(rel))?),
             None => None,
         },
+        disabled: Disabled::default(),
+    };
+    let off = disabled_stages(ctx, &spec.disable)?;
+    scene.disabled = Disabled {
+        proximity: off.contains(&"proximity"),
+        physics: off.contains(&"physics"),
+        collision: off.contains(&"collision"),
+        separation: off.contains(&"separation"),
     };
     // Obstacles first: handles may follow one.
     for (o, os) in spec.obstacles.iter().enumerate() {
@@ -165,6 +174,17 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
     for (c, cs) in spec.cloths.iter().enumerate() {
         add_cloth(ctx, &mut scene, c, cs)?;
     }
+    for cloth in &mut scene.cloths {
+        if off.contains(&"remeshing") {
+            cloth.remesh = None;
+        }
+        if off.contains(&"strain_limiting") {
+            cloth.strain_limits = None;
+        }
+        if off.contains(&"lra") {
+            cloth.lra = None;
+        }
+    }
     scene.mesh.rebuild_topology().map_err(|e| ctx.err("cloths", e.to_string()))?;
     let density: Vec<f64> = scene.materials.iter().map(|m| m.density).collect();
     scene.mesh.compute_masses(&density);
@@ -173,6 +193,19 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
         scene.collision.self_collision = !scene.obstacles.is_empty();
     }
     Ok(scene)
+}
+
+/// The stages `disable` names, each one of `Disabled::NAMES`.
+fn disabled_stages<'a>(ctx: &Ctx, names: &'a [String]) -> Res<Vec<&'a str>> {
+    let mut out = Vec::new();
+    for (i, name) in names.iter().enumerate() {
+        if !Disabled::NAMES.contains(&name.as_str()) {
+            let known = Disabled::NAMES.map(|n| format!("\"{n}\"")).join(", ");
+            return Err(ctx.err(format!("disable[{i}]"), format!("expected one of {known}, got \"{name}\"")));
+        }
+        out.push(name.as_str());
+    }
+    Ok(out)
 }
 
 /// `start_frame` (an integer in 0..=100000000) and `preroll` (seconds ≥ 0, a whole number of
@@ -238,17 +271,28 @@ fn non_negative(ctx: &Ctx, path: &str, v: f64) -> Res<f64> {
 }
 
 fn transform(ctx: &Ctx, path: &str, t: &TransformSpec) -> Res<Transform> {
+    let xf = key_transform(ctx, path, t, false)?;
+    Ok(xf)
+}
+
+/// A transform whose scale may be 0 when `zero_scale` (a handle's keyframe can pull its nodes
+/// onto a point, as ARCSim's can).
+fn key_transform(ctx: &Ctx, path: &str, t: &TransformSpec, zero_scale: bool) -> Res<Transform> {
     finite3(ctx, &format!("{path}.translate"), t.translate)?;
     if let Some(r) = t.rotate {
         if !r.iter().all(|c| c.is_finite()) || (r[0] != 0.0 && Vec3::new(r[1], r[2], r[3]).norm() == 0.0) {
             return Err(ctx.err(format!("{path}.rotate"), "expected [degrees, axis x, y, z] with a non-zero axis"));
         }
     }
-    positive(ctx, &format!("{path}.scale"), t.scale)?;
+    match zero_scale {
+        true => non_negative(ctx, &format!("{path}.scale"), t.scale)?,
+        false => positive(ctx, &format!("{path}.scale"), t.scale)?,
+    };
     Ok(Transform::new(t.translate, t.rotate, t.scale))
 }
 
-fn motion(ctx: &Ctx, path: &str, keys: &[KeyframeSpec]) -> Res<Motion> {
+/// Keyframes at `path`; `zero_scale`: a key's scale may be 0 (handles).
+fn motion(ctx: &Ctx, path: &str, keys: &[KeyframeSpec], zero_scale: bool) -> Res<Motion> {
     if keys.is_empty() {
         return Err(ctx.err(path, "expected at least one keyframe"));
     }
@@ -267,7 +311,7 @@ fn motion(ctx: &Ctx, path: &str, keys: &[KeyframeSpec]) -> Res<Motion> {
             }
         }
         let t = TransformSpec { translate: k.translate, rotate: k.rotate, scale: k.scale };
-        out.push(Keyframe { time: k.time, transform: transform(ctx, &p, &t)? });
+        out.push(Keyframe { time: k.time, transform: key_transform(ctx, &p, &t, zero_scale)? });
         let velocity = match &k.velocity {
             Some(v) => {
                 let translate = finite3(ctx, &format!("{p}.velocity.translate"), v.translate)?;
@@ -283,11 +327,18 @@ fn motion(ctx: &Ctx, path: &str, keys: &[KeyframeSpec]) -> Res<Motion> {
     Ok(Motion::with_velocities(out, velocities))
 }
 
-/// The motion of a handle or obstacle at `path`: keyframes, a `.mot` body, or none.
-fn motion_or_mot(ctx: &Ctx, path: &str, keys: Option<&[KeyframeSpec]>, mot: Option<&MotSpec>) -> Res<Option<Motion>> {
+/// The motion of a handle or obstacle at `path`: keyframes (with `zero_scale`, a key may have
+/// scale 0), a `.mot` body, or none.
+fn motion_or_mot(
+    ctx: &Ctx,
+    path: &str,
+    keys: Option<&[KeyframeSpec]>,
+    mot: Option<&MotSpec>,
+    zero_scale: bool,
+) -> Res<Option<Motion>> {
     match (keys, mot) {
         (Some(_), Some(_)) => Err(ctx.err(format!("{path}.mot"), "give motion or mot, not both")),
-        (Some(k), None) => motion(ctx, &format!("{path}.motion"), k).map(Some),
+        (Some(k), None) => motion(ctx, &format!("{path}.motion"), k, zero_scale).map(Some),
         (None, Some(m)) => {
             let mp = format!("{path}.mot");
             let fps = positive(ctx, &format!("{mp}.fps"), m.fps)?;
@@ -380,33 +431,12 @@ fn add_cloth(ctx: &Ctx, scene: &mut Scene, c: usize, cs: &ClothSpec) -> Res<()> 
     for f in &local.faces {
         scene.mesh.faces.push(Face { v: f.v.map(|v| VertId(v.0 + vert0 as u32)), material: c as u16 });
     }
+    let run_start = scene.start_time();
     for (h, hs) in cs.handles.iter().enumerate() {
         let hp = format!("{path}.handles[{h}]");
-        let nodes = handle_nodes(ctx, &hp, hs, &local)?;
-        let anchors = nodes.iter().map(|&n| scene.mesh.nodes[n + node0].x).collect();
-        let motion = motion_or_mot(ctx, &hp, hs.motion.as_deref(), hs.mot.as_ref())?;
-        let follow = match &hs.obstacle {
-            Some(_) if motion.is_some() => {
-                return Err(ctx.err(format!("{hp}.obstacle"), "give motion (or mot) or obstacle, not both"))
-            }
-            Some(name) => Some(follow_obstacle(ctx, &format!("{hp}.obstacle"), name, &scene.obstacles)?),
-            None => None,
-        };
-        let start = hs.start_time.unwrap_or(f64::NEG_INFINITY);
-        let end = hs.end_time.unwrap_or(f64::INFINITY);
-        if start.is_nan() || end.is_nan() || end <= start {
-            return Err(
-                ctx.err(format!("{hp}.end_time"), format!("expected end_time > start_time, got {start} .. {end}"))
-            );
-        }
-        scene.handles.push(Handle {
-            nodes: nodes.iter().map(|n| n + node0).collect(),
-            anchors,
-            motion,
-            follow,
-            start,
-            end,
-        });
+        let x: Vec<Vec3> = scene.mesh.nodes.iter().map(|n| n.x).collect();
+        let handle = load_handle(ctx, &hp, hs, &local, node0, &x, &scene.obstacles, run_start)?;
+        scene.handles.push(handle);
     }
     let remesh = cs.remesh.as_ref().map(|r| remesh_params(ctx, &format!("{path}.remesh"), r)).transpose()?;
     let lra = cs.lra.as_ref().map(|l| lra_params(ctx, &format!("{path}.lra"), l)).transpose()?;
@@ -415,59 +445,6 @@ fn add_cloth(ctx: &Ctx, scene: &mut Scene, c: usize, cs: &ClothSpec) -> Res<()> 
     scene.cloths.push(Cloth { name, material: scene.materials.len(), remesh, flat_rest, uv_unit, lra, strain_limits });
     scene.materials.push(material);
     Ok(())
-}
-
-/// The obstacle a handle follows, by name; it must be rigid (a per-frame sequence deforms, so
-/// it carries no single transform).
-fn follow_obstacle(ctx: &Ctx, path: &str, name: &str, obstacles: &[Obstacle]) -> Res<FollowObstacle> {
-    let Some(o) = obstacles.iter().position(|ob| ob.name == name) else {
-        let names: Vec<String> = obstacles.iter().map(|ob| format!("\"{}\"", ob.name)).collect();
-        let known = if names.is_empty() { "the scene has none".to_string() } else { names.join(", ") };
-        return Err(ctx.err(path, format!("no obstacle named \"{name}\" (obstacles: {known})")));
-    };
-    if obstacles.iter().filter(|ob| ob.name == name).count() > 1 {
-        return Err(ctx.err(path, format!("several obstacles are named \"{name}\"; name them apart")));
-    }
-    if matches!(obstacles[o].shape, ObstacleShape::Sequence(_)) {
-        return Err(ctx.err(
-            path,
-            format!("obstacle \"{name}\" is a per-frame sequence; a handle can only follow a rigid obstacle"),
-        ));
-    }
-    Ok(FollowObstacle::new(o, &obstacles[o]))
-}
-
-fn handle_nodes(ctx: &Ctx, path: &str, hs: &HandleSpec, mesh: &Mesh) -> Res<Vec<usize>> {
-    let mut nodes = Vec::new();
-    match (&hs.nodes, &hs.region) {
-        (Some(list), None) => {
-            for (i, &n) in list.iter().enumerate() {
-                if n < 0 || n as usize >= mesh.nodes.len() {
-                    return Err(ctx.err(
-                        format!("{path}.nodes[{i}]"),
-                        format!("expected a node index in 0..{}, got {n}", mesh.nodes.len()),
-                    ));
-                }
-                nodes.push(n as usize);
-            }
-        }
-        (None, Some(r)) => {
-            let (lo, hi) = (Vec2::from(r.min), Vec2::from(r.max));
-            for v in &mesh.verts {
-                let u = v.u;
-                if u.x >= lo.x && u.x <= hi.x && u.y >= lo.y && u.y <= hi.y {
-                    nodes.push(v.node.idx());
-                }
-            }
-        }
-        _ => return Err(ctx.err(path, "expected exactly one of \"nodes\" or \"region\"")),
-    }
-    nodes.sort_unstable();
-    nodes.dedup();
-    if nodes.is_empty() {
-        return Err(ctx.err(path, "selects no node"));
-    }
-    Ok(nodes)
 }
 
 fn mesh_from_obj(file: &Path, d: &ObjData, uv_scale: f64) -> Res<Mesh> {

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use super::{format_frame, mesh_file, motion_or_mot, non_negative, positive, transform, Ctx, Res};
-use crate::collision::shape::{MeshSequence, Obstacle, ObstacleShape};
+use crate::collision::shape::{MeshSequence, Obstacle, ObstacleShape, Window};
 use crate::error::InputError;
 use crate::io::obj::{read_obj, ObjData};
 use crate::scene::spec::{ObstacleSpec, SequenceSpec};
@@ -60,8 +60,27 @@ pub(super) fn load_obstacle(ctx: &Ctx, o: usize, os: &ObstacleSpec) -> Res<Obsta
         name: os.name.clone().unwrap_or_else(|| format!("obstacle{o}")),
         shape,
         transform: transform(ctx, &format!("{path}.transform"), &os.transform)?,
-        motion: motion_or_mot(ctx, &path, os.motion.as_deref(), os.mot.as_ref())?,
+        motion: motion_or_mot(ctx, &path, os.motion.as_deref(), os.mot.as_ref(), false)?,
+        window: window(ctx, &path, os)?,
     })
+}
+
+/// `start_time` and `end_time`: finite when given, end after start.
+fn window(ctx: &Ctx, path: &str, os: &ObstacleSpec) -> Res<Window> {
+    let mut w = Window::default();
+    for (field, value, slot) in [("start_time", os.start_time, &mut w.start), ("end_time", os.end_time, &mut w.end)] {
+        if let Some(t) = value {
+            if !t.is_finite() {
+                return Err(ctx.err(format!("{path}.{field}"), format!("expected a time in seconds, got {t}")));
+            }
+            *slot = t;
+        }
+    }
+    if w.end < w.start {
+        let msg = format!("expected end_time ≥ start_time, got {} .. {}", w.start, w.end);
+        return Err(ctx.err(format!("{path}.end_time"), msg));
+    }
+    Ok(w)
 }
 
 /// Reads every file of a per-frame OBJ sequence; all must share the first file's vertex count

@@ -5,18 +5,12 @@ use std::path::PathBuf;
 
 use serde_json::Value;
 
-use super::{join, nums, obj, Conv, Disabled, Magic, J};
+use super::{join, nums, obj, Conv, Magic, Origin, J};
 use crate::scene::arcsim::Res;
 
 impl Conv<'_> {
     /// One cloth's scene fields and its mesh file.
-    pub(super) fn cloth(
-        &mut self,
-        v: &Value,
-        c: usize,
-        disabled: &Disabled,
-        magic: &Magic,
-    ) -> Res<(Vec<(String, J)>, PathBuf)> {
+    pub(super) fn cloth(&mut self, v: &Value, c: usize, magic: &Magic) -> Res<(Vec<(String, J)>, PathBuf)> {
         let loc = format!("cloths[{c}]");
         let m = self.object(v, &loc)?;
         let known = ["mesh", "transform", "velocity", "materials", "remeshing"];
@@ -38,16 +32,22 @@ impl Conv<'_> {
             let msg = "only the first material is used (faces carry no material labels here)";
             self.warn(&format!("{loc}.materials[1]"), msg);
         }
-        let (material, strain_limits) = self.material(first, &format!("{loc}.materials[0]"), disabled)?;
+        let (material, strain_limits) = self.material(first, &format!("{loc}.materials[0]"))?;
+        self.origin(&join(&loc, "material"), Origin::Same(format!("{loc}.materials[0]")));
+        self.origin(&join(&loc, "strain_limits"), Origin::Same(format!("{loc}.materials[0].strain_limits")));
+        self.origin(&join(&loc, "remesh"), Origin::Same(join(&loc, "remeshing")));
         fields.push(("material".into(), material));
         if let Some(sl) = strain_limits {
             fields.push(("strain_limits".into(), nums(&sl)));
         }
-        match (m.get("remeshing"), disabled.remeshing) {
-            (Some(_), true) | (None, _) => {}
-            (Some(r), false) => fields.push(("remesh".into(), self.remeshing(r, &join(&loc, "remeshing"), magic)?)),
+        if let Some(r) = m.get("remeshing") {
+            fields.push(("remesh".into(), self.remeshing(r, &join(&loc, "remeshing"), magic)?));
         }
-        fields.push(("rest_angles".into(), J::Str("flat".into())));
+        // ARCSim's bending rest angles are zero, unless `magic.preserve_creases` makes the input
+        // mesh's folds the rest shape (`reset_plasticity` before and after the initial
+        // relaxation sets every edge's ideal angle to its current one).
+        let rest = if magic.preserve_creases { "input" } else { "flat" };
+        fields.push(("rest_angles".into(), J::Str(rest.into())));
         Ok((fields, full))
     }
 
@@ -69,8 +69,8 @@ impl Conv<'_> {
         }
     }
 
-    /// A material's scene fields, and its `strain_limits` unless `disable` has strain limiting.
-    fn material(&mut self, v: &Value, loc: &str, disabled: &Disabled) -> Res<(J, Option<[f64; 2]>)> {
+    /// A material's scene fields, and its `strain_limits`.
+    fn material(&mut self, v: &Value, loc: &str) -> Res<(J, Option<[f64; 2]>)> {
         let m = self.object(v, loc)?;
         let known = [
             "data",
@@ -103,7 +103,7 @@ impl Conv<'_> {
                     let msg = format!("expected [min, max] with 0 < min ≤ 1 ≤ max, got [{lo}, {hi}]");
                     return Err(self.err(&join(loc, "strain_limits"), msg));
                 }
-                (!disabled.strain_limiting).then_some([lo, hi])
+                Some([lo, hi])
             }
             None => None,
         };

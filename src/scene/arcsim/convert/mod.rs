@@ -9,29 +9,70 @@ use serde_json::{Map, Value};
 use super::ordered::{nums, obj, J};
 use super::Res;
 use crate::error::InputError;
-use crate::math::motion::{KeyVelocity, Keyframe, Motion, Transform};
 
 mod cloth;
+mod handle;
 
 /// A conversion: the viewcloth scene and the warnings.
 pub struct Converted {
     pub scene: J,
     pub warnings: Vec<String>,
+    /// Where fields of the scene come from in the conf (`conf_location`).
+    origins: Vec<(String, Origin)>,
+}
+
+/// The conf field a scene field (and what is under it) was converted from.
+#[derive(Clone, Debug)]
+enum Origin {
+    /// The same subpath under this conf path.
+    Same(String),
+    /// A keyframe list from this entry of `motions`: a key's `translate`, `rotate` and `scale`
+    /// are under its `transform` in the conf.
+    Motion(String),
+}
+
+impl Converted {
+    /// The conf location of the scene location `loc` (a JSON path the scene loader reported),
+    /// when the conversion knows it.
+    pub fn conf_location(&self, loc: &str) -> Option<String> {
+        let under = |prefix: &str| {
+            let rest = loc.strip_prefix(prefix)?;
+            (rest.is_empty() || rest.starts_with(['.', '['])).then_some(rest)
+        };
+        let (rest, origin) = self
+            .origins
+            .iter()
+            .filter_map(|(prefix, o)| under(prefix).map(|rest| (rest, o)))
+            .min_by_key(|(rest, _)| rest.len())?;
+        Some(match origin {
+            Origin::Same(conf) => format!("{conf}{rest}"),
+            Origin::Motion(conf) => {
+                // `[k].scale` → `[k].transform.scale`
+                let (key, field) =
+                    rest.split_once("].").map(|(k, f)| (format!("{k}]"), f)).unwrap_or((rest.into(), ""));
+                match field.split('.').next() {
+                    Some("translate" | "rotate" | "scale") => format!("{conf}{key}.transform.{field}"),
+                    _ if field.is_empty() => format!("{conf}{key}"),
+                    _ => format!("{conf}{key}.{field}"),
+                }
+            }
+        })
+    }
 }
 
 /// Converts a parsed conf. `write_path` turns a resolved file path into the string written
 /// into the scene.
 pub fn convert(conf: &Value, file: &Path, base: &Path, write_path: &dyn Fn(&Path) -> String) -> Res<Converted> {
-    let mut c = Conv { file, base, write_path, warnings: Vec::new() };
+    let mut c = Conv { file, base, write_path, warnings: Vec::new(), origins: Vec::new() };
     let scene = c.scene(conf)?;
-    Ok(Converted { scene, warnings: c.warnings })
+    Ok(Converted { scene, warnings: c.warnings, origins: c.origins })
 }
 
 /// A motion of the conf's `motions`, as the scene will state it.
 #[derive(Clone)]
 enum MotionRef {
-    /// Keyframes (viewcloth form) and the motion they describe.
-    Keys(J, Motion),
+    /// Keyframes (viewcloth form).
+    Keys(J),
     /// Body `body` of a `.mot` file.
     Mot { file: String, body: usize, fps: f64, transform: J },
 }
@@ -40,7 +81,7 @@ impl MotionRef {
     /// The scene field and value that attach this motion.
     fn field(&self) -> (&'static str, J) {
         match self {
-            MotionRef::Keys(keys, _) => ("motion", keys.clone()),
+            MotionRef::Keys(keys) => ("motion", keys.clone()),
             MotionRef::Mot { file, body, fps, transform } => (
                 "mot",
                 obj(vec![
@@ -61,15 +102,14 @@ struct Magic {
     stiffness: Option<f64>,
     combine_tensors: Option<bool>,
     fixed_high_res_mesh: bool,
+    /// Every handle's spring stiffness (N/m; a circle's per metre of ring); ARCSim's default
+    /// 1e3 when absent.
+    handle_stiffness: Option<f64>,
+    preserve_creases: bool,
 }
 
-/// ARCSim modules switched off by `disable`.
-#[derive(Default)]
-struct Disabled {
-    remeshing: bool,
-    strain_limiting: bool,
-    collision: bool,
-}
+/// ARCSim's `magic.handle_stiffness` default (`magic.hpp`).
+const ARCSIM_HANDLE_STIFFNESS: f64 = 1e3;
 
 const TOP_KEYS: &[&str] = &[
     "frame_time",
@@ -103,6 +143,7 @@ struct Conv<'a> {
     base: &'a Path,
     write_path: &'a dyn Fn(&Path) -> String,
     warnings: Vec<String>,
+    origins: Vec<(String, Origin)>,
 }
 
 impl Conv<'_> {
@@ -113,6 +154,11 @@ impl Conv<'_> {
 
     fn warn(&mut self, loc: &str, msg: impl AsRef<str>) {
         self.warnings.push(format!("{loc}: {}", msg.as_ref()));
+    }
+
+    /// Records that the scene field at `scene_loc` comes from the conf as `origin` says.
+    fn origin(&mut self, scene_loc: &str, origin: Origin) {
+        self.origins.push((scene_loc.to_string(), origin));
     }
 
     /// Warns once per key of `m` that is neither known nor among `ignored` (which get their
@@ -175,7 +221,7 @@ impl Conv<'_> {
         let m = self.object(conf, "")?;
         self.check_keys(m, "", TOP_KEYS, TOP_IGNORED);
         let (frame_time, steps, frames) = self.timing(m)?;
-        let disabled = self.disable(m.get("disable"))?;
+        let disable = self.disable(m.get("disable"))?;
         let magic = self.magic(m.get("magic"))?;
         let motions = match m.get("motions") {
             Some(v) => self.motions(v)?,
@@ -188,13 +234,14 @@ impl Conv<'_> {
         let mut cloths = Vec::new();
         let mut meshes = Vec::new();
         for (i, cv) in cloth_values.iter().enumerate() {
-            let (fields, mesh) = self.cloth(cv, i, &disabled, &magic)?;
+            self.origin(&format!("cloths[{i}]"), Origin::Same(format!("cloths[{i}]")));
+            let (fields, mesh) = self.cloth(cv, i, &magic)?;
             cloths.push(fields);
             meshes.push(mesh);
         }
         if let Some(hs) = m.get("handles") {
             for (h, hv) in self.array(hs, "handles")?.iter().enumerate() {
-                self.handle(hv, h, &motions, &meshes, &mut cloths)?;
+                self.handle(hv, h, &motions, &meshes, &magic, &mut cloths)?;
             }
         }
         let obstacles = match m.get("obstacles") {
@@ -216,10 +263,11 @@ impl Conv<'_> {
         if let Some(k) = magic.stiffness {
             collision.insert(1, ("stiffness", J::Num(k)));
         }
-        // ARCSim handles cloth–cloth contact in every scene unless its collision stage is off.
-        collision.push(("self_collision", J::Bool(!disabled.collision)));
+        // ARCSim handles cloth–cloth contact in every scene (its proximity and collision
+        // stages; `disable` may switch either off).
+        collision.push(("self_collision", J::Bool(true)));
         let name = self.file.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-        Ok(obj(vec![
+        let mut fields = vec![
             ("version", J::Int(1)),
             ("name", J::Str(name)),
             ("frame_time", J::Num(frame_time)),
@@ -230,7 +278,18 @@ impl Conv<'_> {
             ("collision", obj(collision)),
             ("cloths", J::Arr(cloths.into_iter().map(J::Obj).collect())),
             ("obstacles", J::Arr(obstacles)),
-        ]))
+        ];
+        if !disable.is_empty() {
+            fields.push(("disable", J::Arr(disable.iter().map(|d| J::Str(d.to_string())).collect())));
+        }
+        self.origin("collision.thickness", Origin::Same("magic.repulsion_thickness".into()));
+        self.origin("collision.stiffness", Origin::Same("magic.collision_stiffness".into()));
+        self.origin("collision.friction", Origin::Same("obs_friction".into()));
+        self.origin("collision.self_friction", Origin::Same("friction".into()));
+        for top in ["gravity", "wind", "disable"] {
+            self.origin(top, Origin::Same(top.into()));
+        }
+        Ok(obj(fields))
     }
 
     /// (frame time, steps per frame, frames) from ARCSim's two timing styles.
@@ -257,7 +316,7 @@ impl Conv<'_> {
                 if let Some(d) = positive(self, "duration")? {
                     self.warn(
                         "duration",
-                        "ARCSim reads it only with \"timestep\" and runs forever here; used as end_time",
+                        "ARCSim reads it only with \"timestep\" (with frame_time it runs until stopped); used as end_time",
                     );
                     end = Some(d);
                 }
@@ -286,23 +345,43 @@ impl Conv<'_> {
         Ok((frame_time, steps, frames as i64))
     }
 
-    fn disable(&mut self, v: Option<&Value>) -> Res<Disabled> {
-        let mut d = Disabled::default();
-        let Some(v) = v else { return Ok(d) };
+    /// ARCSim's `disable` (`conf.cpp`: module names "proximity", "physics", "strainlimiting",
+    /// "collision", "remeshing", "separation", "popfilter", "plasticity"; others are ignored) as
+    /// the scene's `disable`. One warning names the stages viewcloth does not have.
+    fn disable(&mut self, v: Option<&Value>) -> Res<Vec<&'static str>> {
+        let mut out = Vec::new();
+        let mut absent = Vec::new();
+        let Some(v) = v else { return Ok(out) };
         for (i, item) in self.array(v, "disable")?.iter().enumerate() {
             let loc = format!("disable[{i}]");
-            match self.string(item, &loc)? {
-                "remeshing" => d.remeshing = true,
-                "strainlimiting" => d.strain_limiting = true,
-                "collision" => d.collision = true,
-                // Stages viewcloth does not have: nothing to switch off.
-                "separation" | "popfilter" | "plasticity" | "fracture" => {}
-                "proximity" => self.warn(&loc, "repulsion cannot be switched off alone; it stays on"),
-                "physics" => self.warn(&loc, "the physics stage cannot be switched off; it stays on"),
-                other => self.warn(&loc, format!("unknown module \"{other}\", ignored")),
+            let name = match self.string(item, &loc)? {
+                "strainlimiting" => "strain_limiting",
+                "proximity" => "proximity",
+                "physics" => "physics",
+                "collision" => "collision",
+                "remeshing" => "remeshing",
+                "separation" => "separation",
+                // ARCSim's stages that viewcloth does not have: nothing to switch off.
+                other @ ("popfilter" | "plasticity" | "fracture") => {
+                    if !absent.contains(&other.to_string()) {
+                        absent.push(other.to_string());
+                    }
+                    continue;
+                }
+                other => {
+                    self.warn(&loc, format!("\"{other}\" is not an ARCSim module; ignored (as ARCSim does)"));
+                    continue;
+                }
+            };
+            if !out.contains(&name) {
+                out.push(name);
             }
         }
-        Ok(d)
+        if !absent.is_empty() {
+            let msg = format!("viewcloth has no {} stage; nothing to switch off", absent.join(", "));
+            self.warn("disable", msg);
+        }
+        Ok(out)
     }
 
     fn magic(&mut self, v: Option<&Value>) -> Res<Magic> {
@@ -324,12 +403,12 @@ impl Conv<'_> {
                 "collision_stiffness" => magic.stiffness = Some(positive(self)?),
                 "combine_tensors" => magic.combine_tensors = Some(boolean(self)?),
                 "fixed_high_res_mesh" => magic.fixed_high_res_mesh = boolean(self)?,
-                "handle_stiffness" => self.warn(&loc, "ignored (viewcloth handles are exact constraints)"),
+                "handle_stiffness" => magic.handle_stiffness = Some(positive(self)?),
+                "preserve_creases" => magic.preserve_creases = boolean(self)?,
                 "projection_thickness"
                 | "edge_flip_threshold"
                 | "rib_stiffening"
                 | "add_jitter"
-                | "preserve_creases"
                 | "separation_step_size"
                 | "relax_method"
                 | "max_cracks"
@@ -388,28 +467,18 @@ impl Conv<'_> {
         if list.is_empty() {
             return Err(self.err(loc, "expected at least one keyframe"));
         }
-        let (mut out, mut keys, mut vels) = (Vec::new(), Vec::new(), Vec::new());
+        let mut out = Vec::new();
         for (i, kv) in list.iter().enumerate() {
             let kl = format!("{loc}[{i}]");
             let m = self.object(kv, &kl)?;
             self.check_keys(m, &kl, &["time", "transform", "velocity"], &[]);
             let time = self.num(m.get("time").unwrap_or(&Value::Null), &join(&kl, "time"))?;
             let mut fields: Vec<(String, J)> = vec![("time".into(), J::Num(time))];
-            let (mut translate, mut rotate, mut scale) = ([0.0; 3], None, 1.0);
             if let Some(t) = m.get("transform") {
                 let tl = join(&kl, "transform");
                 let J::Obj(tf) = self.transform(t, &tl)? else { unreachable!("transform() builds an object") };
-                for (name, value) in tf {
-                    match (name.as_str(), &value) {
-                        ("translate", J::Arr(a)) => translate = std::array::from_fn(|d| num_of(&a[d])),
-                        ("rotate", J::Arr(a)) => rotate = Some(std::array::from_fn(|d| num_of(&a[d]))),
-                        ("scale", J::Num(s)) => scale = *s,
-                        _ => {}
-                    }
-                    fields.push((name, value));
-                }
+                fields.extend(tf);
             }
-            let mut velocity = None;
             if let Some(vv) = m.get("velocity") {
                 let vl = join(&kl, "velocity");
                 let vm = self.object(vv, &vl)?;
@@ -429,13 +498,18 @@ impl Conv<'_> {
                     }
                 }
                 fields.push(("velocity".into(), obj(vec![("translate", nums(&t)), ("scale", J::Num(s))])));
-                velocity = Some(KeyVelocity { translate: t.into(), scale: s });
             }
             out.push(J::Obj(fields));
-            keys.push(Keyframe { time, transform: Transform::new(translate, rotate, scale) });
-            vels.push(velocity);
         }
-        Ok(MotionRef::Keys(J::Arr(out), Motion::with_velocities(keys, vels)))
+        Ok(MotionRef::Keys(J::Arr(out)))
+    }
+
+    /// Records that the scene's keyframes at `scene_loc` come from the conf motion that `m`'s
+    /// `motion` index (at `loc`) names.
+    fn motion_origin(&mut self, scene_loc: &str, m: &Map<String, Value>, loc: &str) {
+        let Some(i) = m.get("motion").and_then(Value::as_i64) else { return };
+        self.origin(scene_loc, Origin::Motion(format!("motions[{i}]")));
+        self.origin(&scene_loc.replace(".motion", ".mot"), Origin::Same(format!("{loc}.motion")));
     }
 
     fn motion_index(&self, m: &Map<String, Value>, loc: &str, motions: &[MotionRef]) -> Res<Option<MotionRef>> {
@@ -446,93 +520,6 @@ impl Conv<'_> {
             i if i >= 0 && (i as usize) < motions.len() => Ok(Some(motions[i as usize].clone())),
             i => Err(self.err(&ml, format!("expected a motion index in 0..{}, got {i}", motions.len()))),
         }
-    }
-
-    fn handle(
-        &mut self,
-        v: &Value,
-        h: usize,
-        motions: &[MotionRef],
-        meshes: &[PathBuf],
-        cloths: &mut [Vec<(String, J)>],
-    ) -> Res<()> {
-        let loc = format!("handles[{h}]");
-        let m = self.object(v, &loc)?;
-        let kind = match m.get("type") {
-            Some(t) => self.string(t, &join(&loc, "type"))?,
-            None => "node",
-        };
-        if kind != "node" {
-            let why = match kind {
-                "circle" | "glue" | "soft" => format!("{kind} handles are not supported; skipped"),
-                other => format!("unknown handle type \"{other}\"; skipped"),
-            };
-            self.warn(&join(&loc, "type"), why);
-            return Ok(());
-        }
-        let known = ["type", "cloth", "nodes", "label", "motion", "start_time", "end_time", "fade_time"];
-        self.check_keys(m, &loc, &known, &[]);
-        let c = match m.get("cloth") {
-            Some(v) => self.int(v, &join(&loc, "cloth"))?,
-            None => 0,
-        };
-        if c < 0 || c as usize >= cloths.len() {
-            return Err(
-                self.err(&join(&loc, "cloth"), format!("expected a cloth index in 0..{}, got {c}", cloths.len()))
-            );
-        }
-        let c = c as usize;
-        let label = match m.get("label") {
-            Some(l) => self.int(l, &join(&loc, "label"))?,
-            None => -1,
-        };
-        let nodes: Vec<J> = if label != -1 {
-            let labels = node_labels(&meshes[c]).map_err(|msg| self.err(&join(&loc, "label"), msg))?;
-            let ns: Vec<J> = (0..labels.len()).filter(|&n| labels[n] == label).map(|n| J::Int(n as i64)).collect();
-            if ns.is_empty() {
-                let msg = format!("no node of {} has label {label} (OBJ \"nl\" lines)", meshes[c].display());
-                return Err(self.err(&join(&loc, "label"), msg));
-            }
-            ns
-        } else {
-            let list = self.array(m.get("nodes").unwrap_or(&Value::Null), &join(&loc, "nodes"))?;
-            let mut ns = Vec::with_capacity(list.len());
-            for (i, n) in list.iter().enumerate() {
-                ns.push(J::Int(self.int(n, &format!("{loc}.nodes[{i}]"))?));
-            }
-            ns
-        };
-        let mut fields: Vec<(&str, J)> = vec![("nodes", J::Arr(nodes))];
-        let start = self.opt_num(m, "start_time", &loc)?;
-        if let Some(motion) = self.motion_index(m, &loc, motions)? {
-            if let MotionRef::Keys(_, mo) = &motion {
-                let t = mo.eval(start.unwrap_or(0.0));
-                let identity = t.translate.norm() < 1e-12 && (t.scale - 1.0).abs() < 1e-12 && t.rotate.angle() < 1e-12;
-                if !identity {
-                    let msg =
-                        "the motion is not the identity when the handle starts: ARCSim moves the nodes relative to \
-                               their position then, viewcloth applies it to their initial positions";
-                    self.warn(&join(&loc, "motion"), msg);
-                }
-            }
-            fields.push(motion.field());
-        }
-        if let Some(s) = start {
-            fields.push(("start_time", J::Num(s)));
-        }
-        if let Some(e) = self.opt_num(m, "end_time", &loc)? {
-            fields.push(("end_time", J::Num(e)));
-        }
-        if self.opt_num(m, "fade_time", &loc)?.is_some_and(|f| f > 0.0) {
-            self.warn(&join(&loc, "fade_time"), "handles release at end_time without fading");
-        }
-        let handle = obj(fields);
-        let cloth = &mut cloths[c];
-        match cloth.iter_mut().find(|(k, _)| k == "handles") {
-            Some((_, J::Arr(list))) => list.push(handle),
-            _ => cloth.push(("handles".into(), J::Arr(vec![handle]))),
-        }
-        Ok(())
     }
 
     fn obstacles(&mut self, v: &Value, motions: &[MotionRef]) -> Res<Vec<J>> {
@@ -562,12 +549,10 @@ impl Conv<'_> {
         for (o, ov) in self.array(v, "obstacles")?.iter().enumerate() {
             let loc = format!("obstacles[{o}]");
             let m = self.object(ov, &loc)?;
-            let ignored = [
-                ("start_time", "obstacles are present for the whole shot"),
-                ("end_time", "obstacles are present for the whole shot"),
-                ("proxy", "proxies are not supported; the mesh is used"),
-            ];
-            self.check_keys(m, &loc, &["mesh", "transform", "motion"], &ignored);
+            let ignored = [("proxy", "proxies are not supported; the mesh is used")];
+            let known = ["mesh", "transform", "motion", "start_time", "end_time"];
+            self.check_keys(m, &loc, &known, &ignored);
+            self.origin(&loc, Origin::Same(loc.clone()));
             let rel = self.string(m.get("mesh").unwrap_or(&Value::Null), &join(&loc, "mesh"))?;
             let (_, mesh) = self.path(rel);
             let mut fields = vec![("mesh", J::Str(mesh))];
@@ -575,7 +560,14 @@ impl Conv<'_> {
                 fields.push(("transform", self.transform(t, &join(&loc, "transform"))?));
             }
             if let Some(motion) = self.motion_index(m, &loc, motions)? {
+                self.motion_origin(&join(&loc, "motion"), m, &loc);
                 fields.push(motion.field());
+            }
+            // Present from start_time to end_time (ARCSim's `Obstacle::get_mesh`).
+            for key in ["start_time", "end_time"] {
+                if let Some(t) = self.opt_num(m, key, &loc)? {
+                    fields.push((key, J::Num(t)));
+                }
             }
             out.push(obj(fields));
         }
@@ -605,33 +597,4 @@ fn join(loc: &str, key: &str) -> String {
     } else {
         format!("{loc}.{key}")
     }
-}
-
-fn num_of(j: &J) -> f64 {
-    match j {
-        J::Num(x) => *x,
-        J::Int(i) => *i as f64,
-        _ => 0.0,
-    }
-}
-
-/// Node labels of an ARCSim OBJ (`nl <label>` after a `v` line; 0 when absent), per node.
-fn node_labels(path: &Path) -> Result<Vec<i64>, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read mesh file {}: {e}", path.display()))?;
-    let mut labels: Vec<i64> = Vec::new();
-    for (ln, line) in text.lines().enumerate() {
-        let mut words = line.split_whitespace();
-        match words.next() {
-            Some("v") => labels.push(0),
-            Some("nl") => {
-                let label = words.next().and_then(|w| w.parse().ok());
-                match (labels.last_mut(), label) {
-                    (Some(l), Some(x)) => *l = x,
-                    _ => return Err(format!("{}: line {}: bad \"nl\" line", path.display(), ln + 1)),
-                }
-            }
-            _ => {}
-        }
-    }
-    Ok(labels)
 }
