@@ -196,7 +196,7 @@ fn unsupported_keys_are_one_warning_line_each() {
         &conf,
         r#"{"frame_time": 0.04, "frame_steps": 2, "end_frame": 2,
             "cloths": [{"mesh": "meshes/square4.obj",
-                        "materials": [{"data": "materials/paper.json", "yield_curv": 3}]}],
+                        "materials": [{"data": "materials/paper.json", "toughness": 3}]}],
             "handles": [{"type": "glue", "nodes": [0, 1]}],
             "magic": {"handle_stiffness": 1e4, "rib_stiffening": 2, "repulsion_thickness": 2e-3},
             "passive_time": 1, "frobnicate": true}"#,
@@ -210,7 +210,7 @@ fn unsupported_keys_are_one_warning_line_each() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     let lines: Vec<&str> = stderr.lines().collect();
     for key in [
-        "cloths[0].materials[0].yield_curv",
+        "cloths[0].materials[0].toughness",
         "handles[0].type",
         "magic.handle_stiffness",
         "magic.rib_stiffening",

@@ -43,16 +43,17 @@ pub struct RemeshLimits {
 
 /// Remeshes `mesh` to the per-vert sizing metrics `vsize`; nodes flagged in `pinned` (handles)
 /// survive; `shapes` are the faces' rest shape operators (`rest_shape`; empty for a flat rest
-/// shape). Returns the new mesh with the map from old to new node ids and the new faces' rest
-/// shape operators.
+/// shape) and `damage` their plastic damage (empty: none). Returns the new mesh with the map
+/// from old to new node ids and the new faces' rest shape operators and damage.
 pub fn remesh(
     mesh: &Mesh,
     vsize: Vec<Mat2>,
     pinned: Vec<bool>,
     shapes: &[Mat2],
+    damage: &[Real],
     limits: &RemeshLimits,
 ) -> Result<(Finished, RemeshStats), MeshError> {
-    let mut w = Work::new(mesh, vsize, pinned, shapes);
+    let mut w = Work::new(mesh, vsize, pinned, shapes, damage);
     let mut stats = RemeshStats::default();
     let mut guard = Guard::new(&w);
     flip_all(&mut w, &mut guard, &mut stats);

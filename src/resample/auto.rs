@@ -82,8 +82,8 @@ pub fn auto_targets(
             }
             let pinned = vec![false; mesh.nodes.len()];
             let vs = std::mem::take(&mut vsize[c]);
-            let (finished, stats) =
-                remesh(mesh, vs, pinned, &[], &limits).map_err(|e| ResampleError::Auto(format!("remeshing: {e}")))?;
+            let (finished, stats) = remesh(mesh, vs, pinned, &[], &[], &limits)
+                .map_err(|e| ResampleError::Auto(format!("remeshing: {e}")))?;
             *mesh = finished.mesh;
             done[c] = stats.splits == 0;
         }

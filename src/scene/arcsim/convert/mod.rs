@@ -69,6 +69,7 @@ struct Disabled {
     remeshing: bool,
     strain_limiting: bool,
     collision: bool,
+    plasticity: bool,
 }
 
 const TOP_KEYS: &[&str] = &[
@@ -295,8 +296,9 @@ impl Conv<'_> {
                 "remeshing" => d.remeshing = true,
                 "strainlimiting" => d.strain_limiting = true,
                 "collision" => d.collision = true,
+                "plasticity" => d.plasticity = true,
                 // Stages viewcloth does not have: nothing to switch off.
-                "separation" | "popfilter" | "plasticity" | "fracture" => {}
+                "separation" | "popfilter" | "fracture" => {}
                 "proximity" => self.warn(&loc, "repulsion cannot be switched off alone; it stays on"),
                 "physics" => self.warn(&loc, "the physics stage cannot be switched off; it stays on"),
                 other => self.warn(&loc, format!("unknown module \"{other}\", ignored")),
