@@ -80,9 +80,7 @@ impl RestState {
         }
         Ok(RestState { membrane, hinges })
     }
-}
 
-impl RestState {
     /// Takes new rest angles (each hinge's θ̄ from `rest_angles`, indexed by edge) after a
     /// plastic update.
     pub fn set_rest_angles(&mut self, rest_angles: &[Real]) {

@@ -14,6 +14,12 @@
 //! a curved rest mesh stays curved at any resolution, where carrying angles by node pair left
 //! new edges flat and the rest shape a mix. An unchanged neighbourhood gets its angles back
 //! exactly (to rounding); a flat rest shape stays exactly flat.
+//!
+//! Under plasticity (`forces::plasticity`, issue 16 item 9) S_f is the plastic shape itself, the
+//! state, not derived from the angles, and each face's damage rides along the same way (a flip
+//! takes the pair's area-weighted mean). ARCSim resamples both by overlap area against the old
+//! mesh (`restore_residuals`); handing them on with each operation keeps ∫S_f dA over a split or
+//! flip exactly.
 
 use nalgebra::{Matrix3, Vector3};
 

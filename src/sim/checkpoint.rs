@@ -3,9 +3,9 @@
 //!
 //! What is stored is the `SimState` (`state.rs`): the mesh (material coordinates, node
 //! positions, velocities, masses; the faces, from which edges are re-derived in the same
-//! deterministic order), the rest dihedral angles, the faces' plastic state, the handles' node ids, the cloth–cloth pairs
-//! added to the system's sparsity pattern, time, step and frame counters. The `Workspace` is
-//! rebuilt from it and the scene.
+//! deterministic order), the rest dihedral angles, the faces' plastic state, the handles' node
+//! ids, the cloth–cloth pairs added to the system's sparsity pattern, time, step and frame
+//! counters. The `Workspace` is rebuilt from it and the scene.
 //!
 //! Format (little endian): `VCLOTHCK`, format version (u32), the run record, the state, the run
 //! statistics so far (JSON), and an FNV-1a 64 checksum of everything before it. Reals are stored
