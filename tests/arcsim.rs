@@ -205,6 +205,26 @@ fn bad_confs_name_the_json_path() {
 }
 
 #[test]
+fn plasticity_fields_are_read_unscaled_and_disable_drops_them() {
+    let Some(dir) = arcsim_dir("plasticity_fields_are_read_unscaled_and_disable_drops_them") else { return };
+    let conf = temp_dir("arcsim-plastic").join("p.json");
+    let text = |disable: &str| {
+        format!(
+            r#"{{"frame_time": 0.04, "frame_steps": 2, "end_frame": 2, "disable": [{disable}],
+                "cloths": [{{"mesh": "meshes/square4.obj",
+                            "materials": [{{"data": "materials/paper.json", "yield_curv": 200, "weakening": 2}}]}}]}}"#
+        )
+    };
+    std::fs::write(&conf, text("")).unwrap();
+    let plastic = scene::load_path(&conf, Some(&dir)).unwrap();
+    let p = plastic.scene.materials[0].plasticity.expect("plastic");
+    assert_eq!((p.yield_curv, p.weakening), (200.0, 2.0));
+    assert!(plastic.warnings.is_empty(), "{:?}", plastic.warnings);
+    std::fs::write(&conf, text(r#""plasticity""#)).unwrap();
+    assert_eq!(scene::load_path(&conf, Some(&dir)).unwrap().scene.materials[0].plasticity, None);
+}
+
+#[test]
 fn unsupported_keys_are_one_warning_line_each() {
     let Some(dir) = arcsim_dir("unsupported_keys_are_one_warning_line_each") else { return };
     let conf = temp_dir("arcsim-warn").join("w.json");
@@ -212,7 +232,7 @@ fn unsupported_keys_are_one_warning_line_each() {
         &conf,
         r#"{"frame_time": 0.04, "frame_steps": 2, "end_frame": 2,
             "cloths": [{"mesh": "meshes/square4.obj",
-                        "materials": [{"data": "materials/paper.json", "yield_curv": 3}]}],
+                        "materials": [{"data": "materials/paper.json", "toughness": 3}]}],
             "handles": [{"nodes": [0], "labels": [1]}],
             "magic": {"projection_thickness": 1e-4, "rib_stiffening": 2, "repulsion_thickness": 2e-3},
             "passive_time": 1, "frobnicate": true}"#,
@@ -226,7 +246,7 @@ fn unsupported_keys_are_one_warning_line_each() {
     let stderr = String::from_utf8_lossy(&out.stderr);
     let lines: Vec<&str> = stderr.lines().collect();
     for key in [
-        "cloths[0].materials[0].yield_curv",
+        "cloths[0].materials[0].toughness",
         "handles[0].labels",
         "magic.projection_thickness",
         "magic.rib_stiffening",

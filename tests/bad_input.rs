@@ -277,6 +277,24 @@ fn cases() -> Vec<Case> {
             "positive",
         ),
         json(
+            "negative_yield_curvature",
+            rect.replace("\"preset\": \"cotton\"", "\"yield_curv\": -200"),
+            Loc::Field("cloths[0].material.yield_curv"),
+            "positive curvature",
+        ),
+        json(
+            "weakening_without_yield",
+            rect.replace("\"preset\": \"cotton\"", "\"weakening\": 1"),
+            Loc::Field("cloths[0].material.weakening"),
+            "yield_curv",
+        ),
+        json(
+            "negative_weakening",
+            rect.replace("\"preset\": \"cotton\"", "\"yield_curv\": 200, \"weakening\": -1"),
+            Loc::Field("cloths[0].material.weakening"),
+            "≥ 0",
+        ),
+        json(
             "negative_stiffness",
             rect.replace("\"preset\": \"cotton\"", "\"youngs_modulus\": -1e6, \"thickness\": 0.001"),
             Loc::Field("cloths[0].material.youngs_modulus"),

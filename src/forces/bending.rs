@@ -30,6 +30,21 @@ pub fn dihedral_angle<T: Num>(x: &[V3<T>; 4]) -> T {
     sin.atan2(cos)
 }
 
+/// The dihedral angle `theta` taken within π of `reference` (a multiple of 2π added): a hinge
+/// folded past ±π, as a flattened crease is, stays on the side of its rest angle instead of
+/// jumping to the other (ARCSim's `unwrap_angle` about the edge's reference angle). The same
+/// value when |θ − reference| ≤ π, so a flat rest shape is untouched.
+pub fn unwrap_angle(theta: Real, reference: Real) -> Real {
+    use std::f64::consts::PI;
+    if theta - reference > PI {
+        theta - 2.0 * PI
+    } else if theta - reference < -PI {
+        theta + 2.0 * PI
+    } else {
+        theta
+    }
+}
+
 /// ∂θ/∂x (Bridson et al. 2003, eqs. 4–7): the wing vertices move along their face normals with
 /// magnitude 1/height; the edge vertices take the rest so that translations and rotations leave
 /// θ unchanged.
@@ -63,7 +78,7 @@ pub fn dihedral_hessian(x: &[Vec3; 4]) -> Mat12 {
 /// Energy, gradient and Hessian of one hinge; `kb` is the bending stiffness (N·m).
 pub fn bending(x: &[Vec3; 4], rest: &BendingRest, kb: Real, proj: Projection) -> (Real, Vec12, Mat12) {
     let xv = to_v3(x);
-    let theta = dihedral_angle(&xv);
+    let theta = unwrap_angle(dihedral_angle(&xv), rest.theta0);
     let g = dihedral_gradient(&xv);
     let grad_theta = Vec12::from_fn(|r, _| g[r / 3].0[r % 3]);
     let c = 0.5 * kb * rest.shape;

@@ -34,7 +34,7 @@
 use crate::math::dual::V3;
 use crate::math::{pos_part2, Mat12, Mat2, Mat3, Real, Vec12, Vec2, Vec3, Vec9};
 
-use super::bending::{dihedral_angle, dihedral_gradient, dihedral_hessian, BendingRest};
+use super::bending::{dihedral_angle, dihedral_gradient, dihedral_hessian, unwrap_angle, BendingRest};
 use super::membrane::{deformation_gradient, strain_jacobian, MembraneRest};
 use super::Projection;
 
@@ -281,7 +281,7 @@ pub fn measured_bending(
     proj: Projection,
 ) -> (Real, Vec12, Mat12) {
     let xv = x.map(|p| V3([p.x, p.y, p.z]));
-    let theta = dihedral_angle(&xv);
+    let theta = unwrap_angle(dihedral_angle(&xv), rest.theta0);
     let g = dihedral_gradient(&xv);
     let grad_theta = Vec12::from_fn(|r, _| g[r / 3].0[r % 3]);
     let curv = theta.abs() * hinge.curvature_per_angle;

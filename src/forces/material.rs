@@ -6,6 +6,7 @@ use std::sync::Arc;
 use super::bending::bending;
 use super::data_driven::{measured_bending, measured_membrane, MeasuredMaterial};
 use super::membrane::{membrane, MembraneRest, MembraneStiffness};
+use super::plasticity::Plasticity;
 use super::{Hinge, Projection};
 use crate::math::{Mat12, Mat9, Real, Vec12, Vec3, Vec9};
 
@@ -22,22 +23,45 @@ pub struct Material {
     /// Measured stretching and bending (Wang et al. 2011); when present it replaces `membrane`
     /// and `bending`.
     pub measured: Option<Arc<MeasuredMaterial>>,
+    /// Bending plasticity and damage (Narain et al. 2013); `None`: elastic.
+    pub plasticity: Option<Plasticity>,
 }
 
 impl Material {
-    /// The membrane kernel of this fabric for one face.
+    /// The membrane kernel of this fabric for one face, weakened by its damage.
     pub fn stretch(&self, x: &[Vec3; 3], rest: &MembraneRest, proj: Projection) -> (Real, Vec9, Mat9) {
-        match &self.measured {
+        let out = match &self.measured {
             Some(m) => measured_membrane(x, rest, &m.stretching, proj),
             None => membrane(x, rest, &self.membrane, proj),
-        }
+        };
+        weaken(out, rest.weakened)
     }
 
-    /// The bending kernel of this fabric for one hinge.
+    /// The bending kernel of this fabric for one hinge, weakened by its damage.
     pub fn bend(&self, x: &[Vec3; 4], hinge: &Hinge, proj: Projection) -> (Real, Vec12, Mat12) {
-        match &self.measured {
+        let out = match &self.measured {
             Some(m) => measured_bending(x, &hinge.rest, &hinge.measured, &m.bending, proj),
             None => bending(x, &hinge.rest, self.bending, proj),
-        }
+        };
+        weaken(out, hinge.weakened)
     }
+
+    /// The weakening w of plastic damage (0 for an elastic fabric).
+    pub fn weakening(&self) -> Real {
+        self.plasticity.map_or(0.0, |p| p.weakening)
+    }
+}
+
+/// A kernel's output with its stiffness divided by 1 + w·d (`plasticity`): energy, gradient and
+/// Hessian are all linear in the stiffness.
+fn weaken<G: std::ops::MulAssign<Real>, H: std::ops::MulAssign<Real>>(
+    (mut e, mut g, mut h): (Real, G, H),
+    factor: Real,
+) -> (Real, G, H) {
+    if factor != 1.0 {
+        e *= factor;
+        g *= factor;
+        h *= factor;
+    }
+    (e, g, h)
 }

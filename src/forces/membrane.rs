@@ -16,6 +16,8 @@ pub struct MembraneRest {
     pub dm_inv: Mat2,
     /// Material-space area (m²).
     pub area: Real,
+    /// Stiffness factor 1/(1 + w·d) of plastic damage (`plasticity`); 1 when undamaged.
+    pub weakened: Real,
 }
 
 impl MembraneRest {
@@ -23,7 +25,7 @@ impl MembraneRest {
         let dm = Mat2::from_columns(&[u[1] - u[0], u[2] - u[0]]);
         let area = 0.5 * dm.determinant();
         let dm_inv = dm.try_inverse()?;
-        (area > 0.0).then_some(MembraneRest { dm_inv, area })
+        (area > 0.0).then_some(MembraneRest { dm_inv, area, weakened: 1.0 })
     }
 
     /// The shape-function gradients b₀, b₁, b₂ (F = Σ xᵢ bᵢᵀ).

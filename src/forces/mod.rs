@@ -7,6 +7,7 @@ pub mod data_driven;
 pub mod handle;
 pub mod material;
 pub mod membrane;
+pub mod plasticity;
 pub mod wind;
 
 /// Which Hessian a kernel returns.
@@ -32,6 +33,8 @@ pub struct Hinge {
     pub rest: BendingRest,
     /// Edge direction and curvature scale, for measured (direction-dependent) bending.
     pub measured: data_driven::HingeRest,
+    /// Stiffness factor 1/(1 + w·d) of plastic damage (`plasticity`); 1 when undamaged.
+    pub weakened: Real,
 }
 
 /// Rest-state data of every element, rebuilt whenever the topology changes.
@@ -73,9 +76,36 @@ impl RestState {
                 material: mesh.faces[f0.idx()].material as usize,
                 rest: BendingRest { shape: 3.0 * len2 / area, theta0: rest_angle(e) },
                 measured: data_driven::HingeRest::new([du0, du1], len2.sqrt(), area),
+                weakened: 1.0,
             });
         }
         Ok(RestState { membrane, hinges })
+    }
+
+    /// Takes new rest angles (each hinge's θ̄ from `rest_angles`, indexed by edge) after a
+    /// plastic update.
+    pub fn set_rest_angles(&mut self, rest_angles: &[Real]) {
+        for h in &mut self.hinges {
+            h.rest.theta0 = rest_angles[h.edge];
+        }
+    }
+
+    /// The stiffness factors of plastic damage (`plasticity`): a face's from its own damage
+    /// `damage[f]` and its material's weakening, a hinge's from the mean of its two faces'
+    /// damage and the larger of their materials' weakening (ARCSim's `recompute_edge_plasticity`
+    /// and `bending_energy`). `weakening` is indexed by material.
+    pub fn weaken(&mut self, mesh: &Mesh, damage: &[Real], weakening: &[Real]) {
+        let w_face = |f: usize| weakening[mesh.faces[f].material as usize];
+        for (f, m) in self.membrane.iter_mut().enumerate() {
+            m.weakened = plasticity::weakened(w_face(f), damage[f]);
+        }
+        for h in &mut self.hinges {
+            let (Some((f0, _)), Some((f1, _))) = (mesh.edges[h.edge].adj.0[0], mesh.edges[h.edge].adj.0[1]) else {
+                continue;
+            };
+            let (f0, f1) = (f0.idx(), f1.idx());
+            h.weakened = plasticity::weakened(w_face(f0).max(w_face(f1)), 0.5 * (damage[f0] + damage[f1]));
+        }
     }
 }
 

@@ -44,17 +44,19 @@ pub struct RemeshLimits {
 /// Remeshes `mesh` to the per-vert sizing metrics `vsize`; nodes flagged in `pinned` (handles)
 /// survive; `groups` (empty: none) gives nodes a group that a node split between two of them
 /// joins; `shapes` are the faces' rest shape operators (`rest_shape`; empty for a flat rest
-/// shape). Returns the new mesh with the map from old to new node ids, the new faces' rest
-/// shape operators and the nodes' groups.
+/// shape) and `damage` their plastic damage (empty: none). Returns the new mesh with the map
+/// from old to new node ids, the new faces' rest shape operators and damage, and the nodes'
+/// groups.
 pub fn remesh(
     mesh: &Mesh,
     vsize: Vec<Mat2>,
     pinned: Vec<bool>,
     groups: &[u32],
     shapes: &[Mat2],
+    damage: &[Real],
     limits: &RemeshLimits,
 ) -> Result<(Finished, RemeshStats), MeshError> {
-    let mut w = Work::new(mesh, vsize, pinned, shapes);
+    let mut w = Work::new(mesh, vsize, pinned, shapes, damage);
     if !groups.is_empty() {
         w.group = groups.to_vec();
     }

@@ -105,10 +105,11 @@ pub fn flip(w: &Work, a: usize, b: usize) -> Option<Op> {
     if w.area(&t0) <= floor || w.area(&t1) <= floor {
         return None;
     }
-    // The pair's rest shape, area-weighted, goes to both new faces (`rest_shape`).
+    // The pair's rest shape and damage, area-weighted, go to both new faces (`rest_shape`).
     let (a0, a1) = (w.area(&w.faces[f0]), w.area(&w.faces[f1]));
     let shape = (a0 * w.fdata[f0].shape + a1 * w.fdata[f1].shape) / (a0 + a1);
-    let (d0, d1) = (FaceData { shape, ..w.fdata[f0] }, FaceData { shape, ..w.fdata[f1] });
+    let damage = (a0 * w.fdata[f0].damage + a1 * w.fdata[f1].damage) / (a0 + a1);
+    let (d0, d1) = (FaceData { shape, damage, ..w.fdata[f0] }, FaceData { shape, damage, ..w.fdata[f1] });
     Some(Op { remove_faces: vec![f0, f1], add_faces: vec![(t0, d0), (t1, d1)], ..Default::default() })
 }
 

@@ -14,6 +14,12 @@
 //! a curved rest mesh stays curved at any resolution, where carrying angles by node pair left
 //! new edges flat and the rest shape a mix. An unchanged neighbourhood gets its angles back
 //! exactly (to rounding); a flat rest shape stays exactly flat.
+//!
+//! Under plasticity (`forces::plasticity`, issue 16 item 9) S_f is the plastic shape itself, the
+//! state, not derived from the angles, and each face's damage rides along the same way (a flip
+//! takes the pair's area-weighted mean). ARCSim resamples both by overlap area against the old
+//! mesh (`restore_residuals`); handing them on with each operation keeps ∫S_f dA over a split or
+//! flip exactly.
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -37,43 +43,71 @@ fn edge_terms(mesh: &Mesh, f: usize) -> Matrix3<Real> {
     a
 }
 
+/// The shape operator of face `f` from the angles of its edges (zero for a degenerate face).
+pub fn face_shape(mesh: &Mesh, f: usize, angles: &[Real]) -> Mat2 {
+    let area = mesh.material_area(f);
+    if area <= 0.0 {
+        return Mat2::zeros();
+    }
+    let theta = Vector3::from(mesh.face_edges[f].map(|e| angles[e.idx()]));
+    let s = edge_terms(mesh, f) * theta / area;
+    Mat2::new(s[0], s[2], s[2], s[1])
+}
+
 /// The rest shape operator of every face from the rest angles of its edges (zero for a
 /// degenerate face).
 pub fn face_shapes(mesh: &Mesh, rest_angles: &[Real]) -> Vec<Mat2> {
-    (0..mesh.faces.len())
-        .map(|f| {
-            let area = mesh.material_area(f);
-            if area <= 0.0 {
-                return Mat2::zeros();
-            }
-            let theta = Vector3::from(mesh.face_edges[f].map(|e| rest_angles[e.idx()]));
-            let s = edge_terms(mesh, f) * theta / area;
-            Mat2::new(s[0], s[2], s[2], s[1])
-        })
-        .collect()
+    (0..mesh.faces.len()).map(|f| face_shape(mesh, f, rest_angles)).collect()
+}
+
+/// The angles of face `f`'s edges (edge k opposite corner k) whose shape operator is `s`; `None`
+/// for a face that cannot be solved (degenerate).
+fn solve_face(mesh: &Mesh, f: usize, s: &Mat2) -> Option<Vector3<Real>> {
+    let area = mesh.material_area(f);
+    let inv = edge_terms(mesh, f).try_inverse().filter(|_| area > 0.0)?;
+    Some(inv * (area * Vector3::new(s[(0, 0)], s[(1, 1)], 0.5 * (s[(0, 1)] + s[(1, 0)]))))
 }
 
 /// Rest angle of every edge from the faces' rest shape operators: each face's edge angles solved
 /// from its S_f, averaged over an interior edge's two faces; zero on boundary edges (which do not
 /// bend) and where no adjacent face can be solved.
 pub fn edge_angles_from_shapes(mesh: &Mesh, shapes: &[Mat2]) -> Vec<Real> {
+    let mut angles = vec![0.0; mesh.edges.len()];
+    solve_edges(mesh, shapes, &vec![true; mesh.edges.len()], &mut angles);
+    angles
+}
+
+/// `edge_angles_from_shapes` for the edges of the faces flagged in `changed` only: the other
+/// rest angles are left exactly as they are.
+pub fn refresh_edge_angles(mesh: &Mesh, shapes: &[Mat2], changed: &[bool], angles: &mut [Real]) {
+    let mut stale = vec![false; mesh.edges.len()];
+    for f in (0..mesh.faces.len()).filter(|&f| changed[f]) {
+        mesh.face_edges[f].iter().for_each(|e| stale[e.idx()] = true);
+    }
+    solve_edges(mesh, shapes, &stale, angles);
+}
+
+/// Sets `angles[e]` of every edge flagged in `stale` from the shapes of its faces.
+fn solve_edges(mesh: &Mesh, shapes: &[Mat2], stale: &[bool], angles: &mut [Real]) {
     let mut sum = vec![0.0; mesh.edges.len()];
     let mut count = vec![0u8; mesh.edges.len()];
     for (f, s) in shapes.iter().enumerate() {
-        let area = mesh.material_area(f);
-        let Some(inv) = edge_terms(mesh, f).try_inverse().filter(|_| area > 0.0) else { continue };
-        let theta = inv * (area * Vector3::new(s[(0, 0)], s[(1, 1)], 0.5 * (s[(0, 1)] + s[(1, 0)])));
-        for (k, e) in mesh.face_edges[f].iter().enumerate() {
+        let edges = mesh.face_edges[f];
+        if !edges.iter().any(|e| stale[e.idx()]) {
+            continue;
+        }
+        let Some(theta) = solve_face(mesh, f, s) else { continue };
+        for (k, e) in edges.iter().enumerate() {
             sum[e.idx()] += theta[k];
             count[e.idx()] += 1;
         }
     }
-    (0..mesh.edges.len())
-        .map(|e| match mesh.hinge_nodes(e).is_some() && count[e] > 0 {
+    for e in (0..mesh.edges.len()).filter(|&e| stale[e]) {
+        angles[e] = match mesh.hinge_nodes(e).is_some() && count[e] > 0 {
             true => sum[e] / Real::from(count[e]),
             false => 0.0,
-        })
-        .collect()
+        };
+    }
 }
 
 #[cfg(test)]

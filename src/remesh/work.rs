@@ -34,21 +34,25 @@ pub struct FaceData {
     pub material: u16,
     /// Rest shape operator in material space (`rest_shape`).
     pub shape: Mat2,
+    /// Plastic damage (`forces::plasticity`), carried as the rest shape is.
+    pub damage: Real,
 }
 
 /// The compacted mesh, for every old node its new id (None if it was removed), and every new
-/// face's rest shape operator.
+/// face's rest shape operator and damage.
 pub struct Finished {
     pub mesh: Mesh,
     pub node_map: Vec<Option<usize>>,
     pub face_shapes: Vec<Mat2>,
     /// The group of every node of `mesh`.
     pub groups: Vec<u32>,
+    pub face_damage: Vec<Real>,
 }
 
 impl Work {
-    /// `shapes`: each face's rest shape operator (empty: all zero, a flat rest shape).
-    pub fn new(mesh: &Mesh, vsize: Vec<Mat2>, pinned: Vec<bool>, shapes: &[Mat2]) -> Self {
+    /// `shapes`: each face's rest shape operator (empty: all zero, a flat rest shape); `damage`
+    /// each face's plastic damage (empty: all zero).
+    pub fn new(mesh: &Mesh, vsize: Vec<Mat2>, pinned: Vec<bool>, shapes: &[Mat2], damage: &[Real]) -> Self {
         let nv = mesh.verts.len();
         let mut vfaces = vec![Vec::new(); nv];
         let faces: Vec<[usize; 3]> = mesh.faces.iter().map(|f| f.v.map(|v| v.idx())).collect();
@@ -76,6 +80,7 @@ impl Work {
                 .map(|f| FaceData {
                     material: mesh.faces[f].material,
                     shape: shapes.get(f).copied().unwrap_or_else(Mat2::zeros),
+                    damage: damage.get(f).copied().unwrap_or(0.0),
                 })
                 .collect(),
             falive: vec![true; faces.len()],
@@ -259,15 +264,16 @@ impl Work {
                 mesh.verts.push(Vert { u: self.u[i], node: NodeId(node_id[self.vnode[i]] as u32) });
             }
         }
-        let mut face_shapes = Vec::new();
+        let (mut face_shapes, mut face_damage) = (Vec::new(), Vec::new());
         for (f, t) in self.faces.iter().enumerate() {
             if self.falive[f] {
                 mesh.faces.push(Face { v: t.map(|v| VertId(vert_id[v] as u32)), material: self.fdata[f].material });
                 face_shapes.push(self.fdata[f].shape);
+                face_damage.push(self.fdata[f].damage);
             }
         }
         mesh.rebuild_topology()?;
         let node_map = (0..old_nodes).map(|i| (node_id[i] != usize::MAX).then_some(node_id[i])).collect();
-        Ok(Finished { mesh, node_map, face_shapes, groups })
+        Ok(Finished { mesh, node_map, face_shapes, face_damage, groups })
     }
 }

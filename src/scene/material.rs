@@ -2,6 +2,7 @@
 
 use crate::forces::material::Material;
 use crate::forces::membrane::MembraneStiffness;
+use crate::forces::plasticity::Plasticity;
 use crate::math::Real;
 
 use super::spec::MaterialSpec;
@@ -28,6 +29,7 @@ const fn preset(density: Real, warp: Real, weft: Real, shear: Real, bending: Rea
         bending,
         damping: 1e-3,
         measured: None,
+        plasticity: None,
     }
 }
 
@@ -106,5 +108,24 @@ pub fn resolve(spec: &MaterialSpec) -> Result<Material, (&'static str, String)> 
     if let Some(s) = positive("bending_mult", spec.bending_mult)? {
         m.bending *= s;
     }
+    m.plasticity = plasticity(spec)?;
     Ok(m)
+}
+
+/// The plasticity of a material block (`forces::plasticity`): `yield_curv` (1/m) > 0, and
+/// `weakening` ≥ 0 only with it (damage accumulates only where a face yields).
+pub fn plasticity(spec: &MaterialSpec) -> Result<Option<Plasticity>, (&'static str, String)> {
+    let weakening = match spec.weakening {
+        None => 0.0,
+        Some(w) if w >= 0.0 && w.is_finite() => w,
+        Some(w) => return Err(("weakening", format!("a number ≥ 0, got {w}"))),
+    };
+    match spec.yield_curv {
+        None if spec.weakening.is_some() => {
+            Err(("weakening", "a yield_curv with it (damage comes from yielding)".into()))
+        }
+        None => Ok(None),
+        Some(k) if k > 0.0 && k.is_finite() => Ok(Some(Plasticity { yield_curv: k, weakening })),
+        Some(k) => Err(("yield_curv", format!("a positive curvature (1/m), got {k}"))),
+    }
 }

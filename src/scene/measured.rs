@@ -93,5 +93,6 @@ pub(super) fn resolve_measured(spec: &MaterialSpec, data: &MeasuredData) -> Resu
         bending: measured.bending[0][0] / 12.0,
         damping,
         measured: Some(Arc::new(measured)),
+        plasticity: super::material::plasticity(spec)?,
     })
 }

@@ -129,9 +129,10 @@ pub struct Scene {
     pub disabled: Disabled,
 }
 
-/// Stages a scene switches off (its `disable` list, ARCSim's names). Remeshing, strain limiting
-/// and long range attachments are switched off at load, by dropping the cloths' `remesh`,
-/// `strain_limits` and `lra`; these are the stages the step itself skips.
+/// Stages a scene switches off (its `disable` list, ARCSim's names). Remeshing, strain limiting,
+/// long range attachments and plasticity are switched off at load, by dropping the cloths'
+/// `remesh`, `strain_limits` and `lra` and the materials' plasticity; these are the stages the
+/// step itself skips.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Disabled {
     /// No repulsion contacts (and so no friction) in the implicit solve.
@@ -148,8 +149,8 @@ pub struct Disabled {
 impl Disabled {
     /// The names `disable` accepts, in the order of a step (ARCSim's module names, with
     /// `strain_limiting` for its `strainlimiting`).
-    pub const NAMES: [&'static str; 7] =
-        ["proximity", "physics", "strain_limiting", "lra", "collision", "remeshing", "separation"];
+    pub const NAMES: [&'static str; 8] =
+        ["proximity", "physics", "strain_limiting", "lra", "collision", "remeshing", "separation", "plasticity"];
 }
 
 impl Scene {

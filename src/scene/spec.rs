@@ -282,6 +282,12 @@ pub struct MaterialSpec {
     /// With `arcsim`: multiplies density, stretching and bending together (ARCSim).
     #[serde(default)]
     pub thicken: Option<f64>,
+    /// Bending plasticity: the yield curvature (1/m); absent = elastic.
+    #[serde(default)]
+    pub yield_curv: Option<f64>,
+    /// With `yield_curv`: stiffnesses are divided by 1 + weakening·damage.
+    #[serde(default)]
+    pub weakening: Option<f64>,
 }
 
 #[derive(Deserialize, Debug, Clone)]

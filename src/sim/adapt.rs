@@ -12,6 +12,7 @@ use crate::sizing::view::face_views;
 use crate::sizing::{face_metrics, vertex_metrics, FaceView, ObstaclePlane, SizingParams};
 
 use super::state::glue_pairs;
+use super::state::PlasticState;
 use super::timers::Stage;
 use super::{SimError, Simulation};
 
@@ -101,7 +102,8 @@ impl Simulation {
         let clock = Instant::now();
         let face = match mode {
             RemeshMode::Adaptive | RemeshMode::View => {
-                face_metrics(&self.state.mesh, &params, &self.obstacle_planes(&params), &views)
+                let plastic = self.plastic_shapes();
+                face_metrics(&self.state.mesh, &params, &self.obstacle_planes(&params), &views, &plastic)
             }
             RemeshMode::Uniform => (0..self.state.mesh.faces.len())
                 .map(|f| match &params[self.state.mesh.faces[f].material as usize] {
@@ -118,12 +120,16 @@ impl Simulation {
         let limits = RemeshLimits { size_min, aspect_min, coarsen: mode.is_adaptive() };
         let preserved = self.preserved_nodes(&params);
         let groups = self.circle_groups();
-        // A flat rest shape (every angle zero) stays flat without carrying it.
-        let shapes = match self.state.rest_angles.iter().any(|&a| a != 0.0) {
-            true => face_shapes(&self.state.mesh, &self.state.rest_angles),
-            false => Vec::new(),
+        // The plastic state is carried as it is; a flat rest shape (every angle zero) stays flat
+        // without carrying it.
+        let (shapes, damage) = match &self.state.plastic {
+            Some(p) => (p.shapes.clone(), p.damage.clone()),
+            None if self.state.rest_angles.iter().any(|&a| a != 0.0) => {
+                (face_shapes(&self.state.mesh, &self.state.rest_angles), Vec::new())
+            }
+            None => (Vec::new(), Vec::new()),
         };
-        let (finished, stats) = remesh(&self.state.mesh, vsize, preserved, &groups, &shapes, &limits)
+        let (finished, stats) = remesh(&self.state.mesh, vsize, preserved, &groups, &shapes, &damage, &limits)
             .map_err(|e| SimError::Mesh(format!("remeshing failed: {e}")))?;
         if stats.splits + stats.collapses + stats.flips > 0 {
             self.adopt(finished)?;
@@ -132,15 +138,24 @@ impl Simulation {
         Ok(stats)
     }
 
+    /// Per face, the plastic rest shape of a face whose material yields (Narain et al. 2013
+    /// refine where it is curved, ARCSim's `Mcurvp`); empty without plasticity.
+    fn plastic_shapes(&self) -> Vec<Option<Mat2>> {
+        let Some(plastic) = &self.state.plastic else { return Vec::new() };
+        let faces = &self.state.mesh.faces;
+        let yields = |f: usize| self.scene.materials[faces[f].material as usize].plasticity.is_some();
+        (0..faces.len()).map(|f| yields(f).then_some(plastic.shapes[f])).collect()
+    }
+
     /// Takes a remeshed mesh: handles renumbered (circle rings: the nodes of their group), rest
     /// angles solved from the rest shape the faces carried through the remesh
-    /// (`remesh::rest_shape`; all zero for a flat rest shape), masses and rest data rebuilt, the
-    /// implicit system's new pattern left for the next step to analyse, cloth pushed back out of
-    /// obstacles (the `separation` stage, unless switched off).
+    /// (`remesh::rest_shape`; all zero for a flat rest shape), the plastic state taken over,
+    /// masses and rest data rebuilt, the implicit system's new pattern left for the next step to
+    /// analyse, cloth pushed back out of obstacles (the `separation` stage, unless switched off).
     fn adopt(&mut self, finished: Finished) -> Result<(), SimError> {
-        let Finished { mesh, node_map, face_shapes, groups } = finished;
+        let Finished { mesh, node_map, face_shapes, face_damage, groups } = finished;
         let state = &mut self.state;
-        let curved = state.rest_angles.iter().any(|&a| a != 0.0);
+        let curved = state.plastic.is_some() || state.rest_angles.iter().any(|&a| a != 0.0);
         for n in state.handle_nodes.iter_mut().flatten() {
             *n = node_map[*n].ok_or_else(|| SimError::Mesh("remeshing removed a handle node".into()))?;
         }
@@ -151,13 +166,16 @@ impl Simulation {
             true => edge_angles_from_shapes(&state.mesh, &face_shapes),
             false => vec![0.0; state.mesh.edges.len()],
         };
+        if let Some(plastic) = &mut state.plastic {
+            *plastic = PlasticState { shapes: face_shapes, damage: face_damage };
+        }
         state.stuck.clear();
         if !groups.iter().all(|&g| g == 0) {
             self.rings_remeshed(&groups);
         }
         let state = &mut self.state;
         state.extra_pairs = glue_pairs(&self.scene, &state.handle_nodes);
-        self.ws.remeshed(state)?;
+        self.ws.remeshed(state, &self.scene.materials)?;
         self.constraints_remeshed();
         if !self.scene.disabled.separation {
             self.push_out(None)?;

@@ -3,10 +3,9 @@
 //!
 //! What is stored is the `SimState` (`state.rs`): the mesh (material coordinates, node
 //! positions, velocities, masses; the faces, from which edges are re-derived in the same
-//! deterministic order), the rest dihedral angles, the handles' node ids and switch-ons (when,
-//! and where their nodes were), the node pairs added to the system's sparsity pattern, time,
-//! step and frame counters. The `Workspace` is
-//! rebuilt from it and the scene.
+//! deterministic order), the rest dihedral angles, the faces' plastic state, the handles' node
+//! ids and switch-ons (when, and where their nodes were), the node pairs added to the system's
+//! sparsity pattern, time, step and frame counters. The `Workspace` is rebuilt from it and the scene.
 //!
 //! Format (little endian): `VCLOTHCK`, format version (u32), the run record, the state, the run
 //! statistics so far (JSON), and an FNV-1a 64 checksum of everything before it. Reals are stored
@@ -16,15 +15,16 @@ use std::path::{Path, PathBuf};
 
 use crate::io::stats::RunStats;
 use crate::io::OutputFormat;
-use crate::math::{Vec2, Vec3};
+use crate::math::{Mat2, Vec2, Vec3};
 use crate::mesh::{Face, Mesh, Node, NodeId, Vert, VertId};
 use crate::scene::{RemeshMode, Scene};
 
 use super::state::HandleOn;
+use super::state::PlasticState;
 use super::SimState;
 
 const MAGIC: &[u8; 8] = b"VCLOTHCK";
-const FORMAT_VERSION: u32 = 5;
+const FORMAT_VERSION: u32 = 6;
 /// File names: `checkpoint_<frame>.bin`.
 const PREFIX: &str = "checkpoint_";
 const SUFFIX: &str = ".bin";
@@ -187,6 +187,15 @@ pub fn encode(run: &RunRecord, st: &SimState, stats: &RunStats) -> Vec<u8> {
     }
     w.usize(st.rest_angles.len());
     st.rest_angles.iter().for_each(|&a| w.f64(a));
+    match &st.plastic {
+        None => w.u8(0),
+        Some(p) => {
+            w.u8(1);
+            w.usize(p.shapes.len());
+            p.shapes.iter().flat_map(|s| s.iter()).for_each(|&c| w.f64(c));
+            p.damage.iter().for_each(|&d| w.f64(d));
+        }
+    }
     w.usize(st.handle_nodes.len());
     for h in &st.handle_nodes {
         w.usize(h.len());
@@ -298,6 +307,18 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
     }
     let na = r.count(8)?;
     let rest_angles = (0..na).map(|_| r.f64()).collect::<Result<Vec<_>, _>>()?;
+    let plastic = match r.u8()? {
+        0 => None,
+        1 => {
+            let nf = r.count(40)?;
+            let shapes = (0..nf)
+                .map(|_| Ok(Mat2::from_column_slice(&[r.f64()?, r.f64()?, r.f64()?, r.f64()?])))
+                .collect::<Result<Vec<_>, String>>()?;
+            let damage = (0..nf).map(|_| r.f64()).collect::<Result<Vec<_>, _>>()?;
+            Some(PlasticState { shapes, damage })
+        }
+        k => return Err(format!("bad plastic state tag {k}")),
+    };
     let nh = r.count(8)?;
     let mut handle_nodes = Vec::with_capacity(nh);
     for _ in 0..nh {
@@ -327,8 +348,19 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
     if r.pos != body.len() {
         return Err("trailing bytes".into());
     }
-    let state =
-        SimState { frame, steps, time, pushed_out, mesh, rest_angles, handle_nodes, handle_on, extra_pairs, stuck };
+    let state = SimState {
+        frame,
+        steps,
+        time,
+        pushed_out,
+        mesh,
+        rest_angles,
+        plastic,
+        handle_nodes,
+        handle_on,
+        extra_pairs,
+        stuck,
+    };
     Ok(Checkpoint { run, state, stats })
 }
 
@@ -417,6 +449,7 @@ mod tests {
             pushed_out: 0,
             mesh: crate::mesh::rectangle(1.0, 1.0, 2, 2).unwrap(),
             rest_angles: vec![0.0; 16],
+            plastic: Some(PlasticState { shapes: vec![Mat2::new(1.0, 2.0, 2.0, 3.0); 8], damage: vec![0.5; 8] }),
             handle_nodes: vec![vec![0, 2]],
             handle_on: vec![Some(HandleOn { time: 0.5, x: vec![Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.0, -1.0, 0.5)] })],
             extra_pairs: vec![(3, 1)],
@@ -442,6 +475,7 @@ mod tests {
         assert_eq!(back.state.extra_pairs, st.extra_pairs);
         assert_eq!(back.state.handle_on, st.handle_on);
         assert_eq!(back.state.stuck, st.stuck);
+        assert_eq!(back.state.plastic, st.plastic);
         for cut in [0, 8, 20, bytes.len() / 2, bytes.len() - 1] {
             assert!(decode(&bytes[..cut]).is_err(), "truncated at {cut} accepted");
         }

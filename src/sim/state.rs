@@ -1,8 +1,9 @@
 //! The simulation state: everything a checkpoint holds, from which the rest of a run (the
 //! `Workspace`) is rebuilt. Together with the scene it determines every later frame bit for bit.
 
-use crate::math::{Real, Vec3};
+use crate::math::{Mat2, Real, Vec3};
 use crate::mesh::Mesh;
+use crate::remesh::rest_shape::face_shapes;
 use crate::scene::{HandleKind, Scene};
 
 use super::SimError;
@@ -26,6 +27,9 @@ pub struct SimState {
     pub mesh: Mesh,
     /// Rest dihedral angle of each edge of `mesh`.
     pub rest_angles: Vec<Real>,
+    /// Per face, the plastic rest shape and damage (`forces::plasticity`); present when a
+    /// material has a yield curvature.
+    pub plastic: Option<PlasticState>,
     /// The nodes of each of the scene's handles in `mesh` (remeshing renumbers them, and adds
     /// to a circle's ring the nodes it splits between two of its nodes; the scene's own
     /// `Handle::nodes` index its input mesh).
@@ -42,12 +46,25 @@ pub struct SimState {
     pub stuck: Vec<[usize; 4]>,
 }
 
+/// The plastic state of every face of the mesh (`forces::plasticity`): the rest shape operator
+/// S_p the edges' rest angles are solved from, and the accumulated damage d.
+#[derive(Clone, Debug, PartialEq)]
+pub struct PlasticState {
+    pub shapes: Vec<Mat2>,
+    pub damage: Vec<Real>,
+}
+
 impl SimState {
     /// The state at load: the scene's input mesh at the start time (0, or before it the preroll), rest angles from its shape (zero on
     /// cloths that rest flat).
     pub fn initial(scene: &Scene) -> SimState {
         let mesh = scene.mesh.clone();
         let rest_angles = scene.rest_angles(&mesh);
+        let plastic = scene
+            .materials
+            .iter()
+            .any(|m| m.plasticity.is_some())
+            .then(|| PlasticState { shapes: face_shapes(&mesh, &rest_angles), damage: vec![0.0; mesh.faces.len()] });
         SimState {
             frame: 0,
             steps: 0,
@@ -67,6 +84,7 @@ impl SimState {
                 .collect(),
             rest_angles,
             extra_pairs: glue_pairs(scene, &scene.handles.iter().map(|h| h.nodes.clone()).collect::<Vec<_>>()),
+            plastic,
             mesh,
             stuck: Vec::new(),
         }
@@ -105,6 +123,15 @@ impl SimState {
         self.mesh.validate().map_err(|e| bad(e.to_string()))?;
         if self.rest_angles.len() != self.mesh.edges.len() {
             return Err(bad(format!("{} rest angles for {} edges", self.rest_angles.len(), self.mesh.edges.len())));
+        }
+        let plastic = scene.materials.iter().any(|m| m.plasticity.is_some());
+        match &self.plastic {
+            None if plastic => return Err(bad("no plastic state for a plastic material".into())),
+            Some(_) if !plastic => return Err(bad("plastic state for elastic materials".into())),
+            Some(p) if p.shapes.len() != self.mesh.faces.len() || p.damage.len() != self.mesh.faces.len() => {
+                return Err(bad(format!("plastic state of {} faces for {}", p.shapes.len(), self.mesh.faces.len())));
+            }
+            _ => {}
         }
         if self.extra_pairs.iter().any(|&(i, j)| i >= n || j >= i) {
             return Err(bad("contact pattern pair out of range".into()));

@@ -1,10 +1,10 @@
 //! One time step as a list of named, timed stages (DESIGN.md "Pipeline of one time step", after
 //! ARCSim's `advance_step`): handles → proximity → assembly / factorisation / solve →
-//! integration → collision, with Coulomb friction inside the solve (`collision::friction`) and the
-//! fault checks of `checks.rs` after the solve and at the end. A stage the scene does not need
-//! does not run, nor one it switches off (`disable`: proximity, physics, collision). An attempt
-//! whose result fails a check is not committed; `Simulation::step` (`recover.rs`) retries it in
-//! halves.
+//! integration → collision → plasticity (`plastic.rs`, when a material yields), with Coulomb
+//! friction inside the solve (`collision::friction`) and the fault checks of `checks.rs` after
+//! the solve and at the end. A stage the scene does not need does not run, nor one it switches
+//! off (`disable`: proximity, physics, collision). An attempt whose result fails a check is not
+//! committed; `Simulation::step` (`recover.rs`) retries it in halves.
 
 use std::time::Instant;
 
@@ -153,6 +153,9 @@ impl Simulation {
         }
         self.timed(Stage::FaultChecks, |s| checks::end_of_step(&s.context(&step), &solved, &x, &v))?;
         self.commit(x, v, t1, step.stuck);
+        if self.state.plastic.is_some() {
+            self.timed(Stage::Plasticity, Simulation::plastic_update);
+        }
         Ok(())
     }
 

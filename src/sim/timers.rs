@@ -44,6 +44,8 @@ pub enum Stage {
     Lra,
     /// Strain limiting after the solve (`constraints::strain_limit`).
     StrainLimit,
+    /// The plastic update at the end of a step (`plastic.rs`).
+    Plasticity,
 }
 
 impl Stage {
@@ -67,6 +69,7 @@ impl Stage {
             Stage::Checkpoint => "checkpoint",
             Stage::Lra => "lra",
             Stage::StrainLimit => "strain_limit",
+            Stage::Plasticity => "plasticity",
         }
     }
 }

@@ -6,6 +6,7 @@
 use crate::collision::obstacle::ObstacleBody;
 use crate::collision::proximity::Contact;
 use crate::collision::world::{CollisionCounters, CollisionWorld};
+use crate::forces::material::Material;
 use crate::forces::RestState;
 use crate::math::Real;
 use crate::mesh::Mesh;
@@ -44,7 +45,7 @@ pub struct Workspace {
 impl Workspace {
     /// The workspace of `state` in `scene`.
     pub fn build(scene: &Scene, state: &SimState) -> Result<Workspace, SimError> {
-        let rest = rest_state(&state.mesh, &state.rest_angles)
+        let rest = rest_state(state, &scene.materials)
             .map_err(|f| SimError::Mesh(format!("face {f} is degenerate in material space")))?;
         let system = ImplicitSystem::new(BlockPattern::new(&state.mesh, &rest.hinges, &state.extra_pairs))
             .map_err(|source| SimError::Solve { step: state.steps, time: state.time, source })?;
@@ -68,9 +69,9 @@ impl Workspace {
 
     /// After a remesh: rest data and node areas of the new mesh, its pattern left for the next
     /// step to analyse.
-    pub fn remeshed(&mut self, state: &SimState) -> Result<(), SimError> {
-        self.rest = rest_state(&state.mesh, &state.rest_angles)
-            .map_err(|f| SimError::Mesh(format!("remeshing left face {f} degenerate")))?;
+    pub fn remeshed(&mut self, state: &SimState, materials: &[Material]) -> Result<(), SimError> {
+        self.rest =
+            rest_state(state, materials).map_err(|f| SimError::Mesh(format!("remeshing left face {f} degenerate")))?;
         self.node_area = node_areas(&state.mesh, &self.rest);
         self.pending_pattern = Some(BlockPattern::new(&state.mesh, &self.rest.hinges, &state.extra_pairs));
         Ok(())
@@ -134,9 +135,17 @@ impl Workspace {
     }
 }
 
-/// Rest data of `mesh`; the error is the first face degenerate in material space.
-fn rest_state(mesh: &Mesh, rest_angles: &[Real]) -> Result<RestState, usize> {
-    RestState::new(mesh, |e| rest_angles[e])
+/// Rest data of the state's mesh, rest angles and plastic damage; the error is the first face
+/// degenerate in material space.
+fn rest_state(state: &SimState, materials: &[Material]) -> Result<RestState, usize> {
+    let mut rest = RestState::new(&state.mesh, |e| state.rest_angles[e])?;
+    if let Some(plastic) = &state.plastic {
+        let weakening: Vec<Real> = materials.iter().map(Material::weakening).collect();
+        if weakening.iter().any(|&w| w > 0.0) {
+            rest.weaken(&state.mesh, &plastic.damage, &weakening);
+        }
+    }
+    Ok(rest)
 }
 
 /// A third of the adjacent faces' material area per node (m²).

@@ -64,6 +64,8 @@ pub struct FaceState {
     pub planes: [Option<ObstaclePlane>; 3],
     /// The camera's view of the face, in view-dependent mode.
     pub view: Option<FaceView>,
+    /// The plastic rest shape operator S_p of a face that yields (`forces::plasticity`).
+    pub plastic: Option<Mat2>,
 }
 
 /// Gradient in material space of a field given at the corners: [f₁ − f₀, f₂ − f₀] D_m⁻¹.
@@ -116,7 +118,13 @@ pub fn face_criteria(s: &FaceState, p: &SizingParams) -> Vec<Mat2> {
         }
         let m1 = shape.transpose() * shape / (dtheta * dtheta);
         let m2 = s2 / (dtheta * dtheta);
-        out.push(tensor_max(&[m1, m2]) * view_scale(s));
+        let curvature = match s.plastic {
+            // A crease stays resolved when it is pressed flat or opened: S_pᵀS_p / Δθ² (Narain
+            // et al. 2013; ARCSim's `Mcurvp`).
+            Some(sp) => tensor_max(&[m1, m2, sp.transpose() * sp / (dtheta * dtheta)]),
+            None => tensor_max(&[m1, m2]),
+        };
+        out.push(curvature * view_scale(s));
     }
     if let Some(c) = p.refine_compression {
         let f = material_gradient(&dm_inv, s.x);
@@ -178,12 +186,14 @@ pub fn face_sizing(s: &FaceState, p: &SizingParams) -> Mat2 {
 
 /// Sizing of every face of `mesh` (clamped) with the parameters of its material (cloth),
 /// `params[material]`, zero for a cloth without; `planes[node]` is the nearest obstacle plane of
-/// each node within range; `views[face]`, when given, the camera's view of each face.
+/// each node within range; `views[face]`, when given, the camera's view of each face;
+/// `plastic[face]`, when given, the plastic rest shape of each face that yields.
 pub fn face_metrics(
     mesh: &Mesh,
     params: &[Option<SizingParams>],
     planes: &[Option<ObstaclePlane>],
     views: &[Option<FaceView>],
+    plastic: &[Option<Mat2>],
 ) -> Vec<Mat2> {
     let angles = edge_angles(mesh);
     let normals = mesh.node_normals();
@@ -203,6 +213,7 @@ pub fn face_metrics(
                 theta: fe.map(|e| angles[e.idx()]),
                 planes: ids.map(|n| planes.get(n).copied().flatten()),
                 view: views.get(f).copied().flatten(),
+                plastic: plastic.get(f).copied().flatten(),
             };
             face_sizing(&state, p)
         })
@@ -250,6 +261,7 @@ mod tests {
             theta: [0.0; 3],
             planes: [None; 3],
             view: None,
+            plastic: None,
         }
     }
 
@@ -270,6 +282,20 @@ mod tests {
         let across = Vec2::new(1.0, 1.0).normalize();
         let along = Vec2::new(1.0, -1.0).normalize();
         assert!(across.dot(&(m * across)) > 4.0 * along.dot(&(m * along)));
+    }
+
+    #[test]
+    fn a_flat_face_with_a_plastic_crease_stays_refined_across_it() {
+        // Pressed flat, a face whose plastic rest shape bends about the v axis (κ = 50 /m) is
+        // refined along u only, to Δθ/κ.
+        let p = SizingParams { refine_compression: None, refine_velocity: None, ..params() };
+        let mut s = flat_face();
+        assert_eq!(face_criteria(&s, &p)[0], Mat2::zeros());
+        s.plastic = Some(Mat2::new(50.0, 0.0, 0.0, 0.0));
+        let m = face_criteria(&s, &p)[0];
+        let l = 0.3 / 50.0;
+        assert!((m[(0, 0)] - 1.0 / (l * l)).abs() < 1e-9 / (l * l), "{m}");
+        assert!(m[(1, 1)].abs() < 1e-9 && m[(0, 1)].abs() < 1e-9, "{m}");
     }
 
     #[test]

@@ -185,6 +185,9 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
             cloth.lra = None;
         }
     }
+    if off.contains(&"plasticity") {
+        scene.materials.iter_mut().for_each(|m| m.plasticity = None);
+    }
     scene.mesh.rebuild_topology().map_err(|e| ctx.err("cloths", e.to_string()))?;
     let density: Vec<f64> = scene.materials.iter().map(|m| m.density).collect();
     scene.mesh.compute_masses(&density);

@@ -84,11 +84,11 @@ impl Conv<'_> {
             "density",
             "elastic_modulus",
             "poisson_ratio",
+            "yield_curv",
+            "weakening",
         ];
-        let not_supported = "plasticity and fracture are not supported";
+        let not_supported = "stretching plasticity and fracture are not supported";
         let ignored = [
-            ("yield_curv", not_supported),
-            ("weakening", not_supported),
             ("yield_stretch", not_supported),
             ("plastic_flow", not_supported),
             ("plastic_limit", not_supported),
@@ -164,7 +164,31 @@ impl Conv<'_> {
             None => 0.0,
         };
         fields.push(("damping", J::Num(damping)));
+        fields.extend(self.plasticity(m, loc)?);
         Ok((obj(fields), strain_limits))
+    }
+
+    /// Bending plasticity (Narain et al. 2013): ARCSim's `yield_curv` (1/m, default ∞: elastic)
+    /// and `weakening` (default 0), read unscaled (`disable` with plasticity drops them at load).
+    fn plasticity(&mut self, m: &serde_json::Map<String, Value>, loc: &str) -> Res<Vec<(&'static str, J)>> {
+        let (yield_curv, weakening) = (self.opt_num(m, "yield_curv", loc)?, self.opt_num(m, "weakening", loc)?);
+        if let Some(k) = yield_curv.filter(|&k| !(k > 0.0)) {
+            return Err(self.err(&join(loc, "yield_curv"), format!("expected a positive curvature (1/m), got {k}")));
+        }
+        if let Some(w) = weakening.filter(|&w| !(w >= 0.0)) {
+            return Err(self.err(&join(loc, "weakening"), format!("expected a number ≥ 0, got {w}")));
+        }
+        match yield_curv {
+            Some(k) => {
+                Ok([("yield_curv", J::Num(k))].into_iter().chain(weakening.map(|w| ("weakening", J::Num(w)))).collect())
+            }
+            None => {
+                if weakening.is_some() {
+                    self.warn(&join(loc, "weakening"), "no effect without yield_curv (as in ARCSim); ignored");
+                }
+                Ok(Vec::new())
+            }
+        }
     }
 
     fn remeshing(&mut self, v: &Value, loc: &str, magic: &Magic) -> Res<J> {

@@ -361,8 +361,9 @@ impl Conv<'_> {
                 "collision" => "collision",
                 "remeshing" => "remeshing",
                 "separation" => "separation",
+                "plasticity" => "plasticity",
                 // ARCSim's stages that viewcloth does not have: nothing to switch off.
-                other @ ("popfilter" | "plasticity" | "fracture") => {
+                other @ ("popfilter" | "fracture") => {
                     if !absent.contains(&other.to_string()) {
                         absent.push(other.to_string());
                     }
