@@ -101,12 +101,6 @@ impl Handle {
         t >= self.start && t < self.end
     }
 
-    /// Whether the handle has switched on by a step starting at `t` and still acts in some
-    /// later step (exact: before `end`; soft: before the fade is over).
-    pub fn on(&self, t: Real) -> bool {
-        t >= self.start && t < self.end + self.fade.max(0.0) || self.active(t)
-    }
-
     /// The spring strength of a soft handle at `t` (ARCSim's `Handle::strength`).
     pub fn strength(&self, t: Real) -> Real {
         if t < self.start || t > self.end + self.fade {
