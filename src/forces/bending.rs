@@ -92,3 +92,30 @@ pub fn bending(x: &[Vec3; 4], rest: &BendingRest, kb: Real, proj: Projection) ->
     }
     (energy, grad, hess)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A hinge of unit edge along x whose second wing is turned by `phi` from flat (θ = φ,
+    /// wrapped into (−π, π]).
+    fn hinge(phi: Real) -> [Vec3; 4] {
+        [Vec3::zeros(), Vec3::x(), Vec3::new(0.5, 1.0, 0.0), Vec3::new(0.5, -phi.cos(), -phi.sin())]
+    }
+
+    #[test]
+    fn a_crease_folded_past_flat_stays_on_its_rest_side() {
+        // Rest angle 3 rad; folded to 3.2 rad, atan2 reads 3.2 − 2π, and the hinge must cost
+        // (0.2)², not (6.08)², and push back the way it pushes when short of its rest angle.
+        let x = hinge(3.2);
+        assert!((dihedral_angle(&to_v3(&x)) - (3.2 - 2.0 * std::f64::consts::PI)).abs() < 1e-12);
+        let rest = BendingRest { shape: 1.0, theta0: 3.0 };
+        let (e, g, _) = bending(&x, &rest, 2.0, Projection::Psd);
+        assert!((e - 0.2 * 0.2).abs() < 1e-12, "{e}");
+        let (_, g_short, _) = bending(&hinge(2.9), &rest, 2.0, Projection::Psd);
+        assert!(g.dot(&g_short) < 0.0, "past and short of the rest angle, the forces must oppose");
+        // Within π of the rest angle nothing changes.
+        assert_eq!(unwrap_angle(1.0, 0.0), 1.0);
+        assert_eq!(unwrap_angle(-3.1, 0.0), -3.1);
+    }
+}
