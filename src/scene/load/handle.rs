@@ -5,22 +5,21 @@
 use super::super::spec::{CircleSpec, HandleSpec};
 use super::{finite3, motion_or_mot, Ctx, Res};
 use crate::collision::shape::{Obstacle, ObstacleShape};
-use crate::math::{Vec2, Vec3};
+use crate::math::Vec2;
 use crate::mesh::Mesh;
-use crate::scene::{Circle, FollowObstacle, Handle, HandleKind};
+use crate::scene::{Circle, FollowObstacle, Handle, HandleKind, Scene};
 
 /// Handle `hs` of a cloth whose input mesh is `local`, its nodes numbered from `node0` in the
-/// scene's mesh, `x` the scene's node positions; `run_start` is the time the run starts at.
+/// scene's mesh (the cloth's nodes already in `scene`, with its obstacles).
 pub(super) fn load_handle(
     ctx: &Ctx,
     hp: &str,
     hs: &HandleSpec,
     local: &Mesh,
     node0: usize,
-    x: &[Vec3],
-    obstacles: &[Obstacle],
-    run_start: f64,
+    scene: &Scene,
 ) -> Res<Handle> {
+    let (obstacles, run_start) = (&scene.obstacles, scene.start_time());
     let stiffness = match hs.stiffness {
         Some(k) if k > 0.0 && k.is_finite() => Some(k),
         Some(k) => return Err(ctx.err(format!("{hp}.stiffness"), format!("expected a positive number (N/m), got {k}"))),
@@ -69,7 +68,7 @@ pub(super) fn load_handle(
     };
     let handle = Handle {
         nodes: nodes.iter().map(|n| n + node0).collect(),
-        anchors: nodes.iter().map(|&n| x[n + node0]).collect(),
+        anchors: nodes.iter().map(|&n| scene.mesh.nodes[n + node0].x).collect(),
         kind,
         motion,
         follow,

@@ -434,11 +434,8 @@ fn add_cloth(ctx: &Ctx, scene: &mut Scene, c: usize, cs: &ClothSpec) -> Res<()> 
     for f in &local.faces {
         scene.mesh.faces.push(Face { v: f.v.map(|v| VertId(v.0 + vert0 as u32)), material: c as u16 });
     }
-    let run_start = scene.start_time();
     for (h, hs) in cs.handles.iter().enumerate() {
-        let hp = format!("{path}.handles[{h}]");
-        let x: Vec<Vec3> = scene.mesh.nodes.iter().map(|n| n.x).collect();
-        let handle = load_handle(ctx, &hp, hs, &local, node0, &x, &scene.obstacles, run_start)?;
+        let handle = load_handle(ctx, &format!("{path}.handles[{h}]"), hs, &local, node0, scene)?;
         scene.handles.push(handle);
     }
     let remesh = cs.remesh.as_ref().map(|r| remesh_params(ctx, &format!("{path}.remesh"), r)).transpose()?;
