@@ -10,12 +10,12 @@
 //! 0.5 s and both let go. At 1.5 s the strip has come to rest (the damping, 0.01 s, takes a
 //! free bending mode of the 50 mm wings, ≈ 40 rad/s, down by e^-8 in 1 s).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 mod common;
 
 use common::temp_dir;
-use serde_json::json;
+use serde_json::{json, Value};
 use viewcloth::math::{Real, Vec2, Vec3};
 use viewcloth::mesh::Mesh;
 use viewcloth::scene;
@@ -52,7 +52,7 @@ fn scene_file(
         { "time": 0.0 },
         { "time": 0.4, "rotate": [fold_deg, 0, 1, 0] }
     ]);
-    let mut cloth = json!({
+    let cloth = json!({
         "rectangle": { "width": 0.1, "height": 0.02, "resolution": [40, 8] },
         "transform": { "translate": [-0.05, 0, 0] },
         "material": paper(yield_curv),
@@ -62,16 +62,7 @@ fn scene_file(
             { "region": band(0.0524, 0.0601), "motion": turn, "end_time": RELEASE }
         ]
     });
-    if let Some(r) = remesh {
-        cloth["remesh"] = r;
-    }
-    let scene = json!({
-        "version": 1, "name": name, "frame_time": FRAME_TIME, "steps_per_frame": 10, "frames": FRAMES,
-        "gravity": [0, 0, 0], "cloths": [cloth]
-    });
-    let file = dir.join(format!("{name}.json"));
-    std::fs::write(&file, scene.to_string()).unwrap();
-    file
+    write_scene(dir, name, cloth, remesh)
 }
 
 /// World position of material point `u` (metres), by barycentric interpolation in the face
@@ -185,17 +176,8 @@ fn folded_file(dir: &Path, name: &str, fold_deg: Real, remesh: Option<serde_json
         }
     }
     std::fs::write(dir.join(format!("{name}.obj")), obj).unwrap();
-    let mut cloth = json!({ "mesh": format!("{name}.obj"), "material": paper(Some(200.0)), "rest_angles": "flat" });
-    if let Some(r) = remesh {
-        cloth["remesh"] = r;
-    }
-    let scene = json!({
-        "version": 1, "name": name, "frame_time": FRAME_TIME, "steps_per_frame": 10, "frames": FRAMES,
-        "gravity": [0, 0, 0], "cloths": [cloth]
-    });
-    let file = dir.join(format!("{name}.json"));
-    std::fs::write(&file, scene.to_string()).unwrap();
-    file
+    let cloth = json!({ "mesh": format!("{name}.obj"), "material": paper(Some(200.0)), "rest_angles": "flat" });
+    write_scene(dir, name, cloth, remesh)
 }
 
 /// ∫ S_p dA over the faces, and how many faces carry a plastic shape.
@@ -299,4 +281,18 @@ fn a_checkpointed_plastic_state_resumes_bitwise() {
         b.advance_frame().unwrap();
         assert!(bits(&a) == bits(&b), "frame {f}: the resumed run differs");
     }
+}
+
+/// Writes the one-cloth scene `name` (no gravity) to `dir`, with `remesh` when given.
+fn write_scene(dir: &Path, name: &str, mut cloth: Value, remesh: Option<Value>) -> PathBuf {
+    if let Some(r) = remesh {
+        cloth["remesh"] = r;
+    }
+    let scene = json!({
+        "version": 1, "name": name, "frame_time": FRAME_TIME, "steps_per_frame": 10, "frames": FRAMES,
+        "gravity": [0, 0, 0], "cloths": [cloth]
+    });
+    let file = dir.join(format!("{name}.json"));
+    std::fs::write(&file, scene.to_string()).unwrap();
+    file
 }
