@@ -483,7 +483,7 @@ fn a_confs_disable_is_honoured_and_the_absent_stages_warned_once() {
         "cloths": [{"mesh": "meshes/grid.obj",
                     "materials": [{"data": "materials/soft.json", "strain_limits": [0.9, 1.1], "yield_curv": 100}],
                     "remeshing": {"size": [0.01, 0.1]}}],
-        "disable": ["popfilter", "strainlimiting", "plasticity", "popfilter", "collision", "remeshing", "warp"]
+        "disable": ["fracture", "strainlimiting", "plasticity", "fracture", "collision", "popfilter", "remeshing", "warp"]
     });
     let path = write_conf(&dir, "disable", &conf, &[("grid.obj", grid_obj(0.2, 2))]);
     let out = viewcloth(&["check", path.to_str().unwrap()]);
@@ -492,12 +492,13 @@ fn a_confs_disable_is_honoured_and_the_absent_stages_warned_once() {
     let lines: Vec<&str> = stderr.lines().collect();
     let about: Vec<&&str> = lines.iter().filter(|l| l.contains(": disable: ")).collect();
     assert_eq!(about.len(), 1, "{stderr}");
-    assert_eq!(about[0].matches("popfilter").count(), 1, "{stderr}");
+    assert_eq!(about[0].matches("fracture").count(), 1, "{stderr}");
     assert_eq!(about[0].matches("plasticity").count(), 0, "plasticity is a stage here: {stderr}");
-    assert!(lines.iter().any(|l| l.contains(": disable[6]: ") && l.contains("warp")), "{stderr}");
+    assert_eq!(about[0].matches("popfilter").count(), 0, "the pop filter is a stage here: {stderr}");
+    assert!(lines.iter().any(|l| l.contains(": disable[7]: ") && l.contains("warp")), "{stderr}");
     assert_eq!(lines.len(), 2, "{stderr}");
     let s = scene::load_path(&path, None).unwrap().scene;
-    assert!(s.disabled.collision && !s.disabled.proximity && !s.disabled.physics);
+    assert!(s.disabled.collision && s.disabled.pop_filter && !s.disabled.proximity && !s.disabled.physics);
     assert!(s.cloths[0].strain_limits.is_none() && s.cloths[0].remesh.is_none());
     assert!(s.materials.iter().all(|m| m.plasticity.is_none()), "disable: plasticity keeps bending elastic");
     assert!(s.collision.self_collision, "ARCSim's proximity still handles cloth–cloth contact");

@@ -54,6 +54,13 @@ pub fn repulsion(contact: &Contact, x: &[Vec3; 4]) -> (Real, Vec12, Mat12) {
     (0.5 * k * g * g, k * g * dg, dg * dg.transpose() * k)
 }
 
+/// Repulsion energy Σ ½ k g² (g < 0) of frozen `contacts`, cloth at `x` and the fixed points
+/// (obstacle vertices) they index past the cloth nodes at `fixed`.
+pub fn contacts_energy(contacts: &[Contact], x: &[Vec3], fixed: &[Vec3]) -> Real {
+    let n = x.len();
+    contacts.iter().map(|c| repulsion(c, &c.nodes.map(|i| if i < n { x[i] } else { fixed[i - n] })).0).sum()
+}
+
 /// A node–face contact when node `p` is closer than `thickness` to face `(a, b, c)` and projects
 /// inside it (ARCSim's rule): the normal is the face normal on p's side and the initial gap is
 /// distance − thickness. A node beside the face is left to the edge–edge and neighbouring

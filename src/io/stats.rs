@@ -88,6 +88,12 @@ pub struct RemeshFrameStats {
     pub splits: usize,
     pub flips: usize,
     pub collapses: usize,
+    /// Newton steps of the pop filter after the remesh (`sim::pop`; 0 when it did not run).
+    #[serde(default)]
+    pub pop_iterations: usize,
+    /// The largest distance the pop filter moved a node (m).
+    #[serde(default)]
+    pub pop_max_move: f64,
 }
 
 /// Collision counters of one frame (summed over its steps).

@@ -13,7 +13,13 @@ pub fn rectangle(width: f64, height: f64, nx: usize, ny: usize) -> Result<Mesh, 
         for i in 0..=nx {
             let u = Vec2::new(width * i as f64 / nx as f64, height * j as f64 / ny as f64);
             let id = mesh.nodes.len() as u32;
-            mesh.nodes.push(Node { x: Vec3::new(u.x, u.y, 0.0), v: Vec3::zeros(), mass: 0.0, cloth: 0 });
+            mesh.nodes.push(Node {
+                x: Vec3::new(u.x, u.y, 0.0),
+                v: Vec3::zeros(),
+                a: Vec3::zeros(),
+                mass: 0.0,
+                cloth: 0,
+            });
             mesh.verts.push(Vert { u, node: NodeId(id) });
         }
     }

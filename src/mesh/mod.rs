@@ -45,6 +45,9 @@ pub struct Vert {
 pub struct Node {
     pub x: Vec3,
     pub v: Vec3,
+    /// Acceleration of the last accepted step's implicit solve (Δv / h; zero before the first
+    /// step, interpolated like the velocity by remeshing): the pop filter's target (`sim::pop`).
+    pub a: Vec3,
     /// Lumped mass (kg), recomputed by `Mesh::compute_masses`.
     pub mass: Real,
     /// Which cloth of the scene this node belongs to.

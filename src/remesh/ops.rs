@@ -1,16 +1,16 @@
 //! Remeshing operations as values (ARCSim's `RemeshOp`): what is added and what is removed.
 //! An operation is built, checked, and only then applied to the working mesh.
 
-use crate::math::{cross2, Mat2, Real, Vec2, Vec3};
+use crate::math::{cross2, Mat2, Real, Vec2};
 
-use super::work::{FaceData, Work};
+use super::work::{FaceData, NewNode, Work};
 
 /// A local change: new nodes, new verts (ids continue the work's arrays, in order), faces
 /// removed and added (over old and new vert ids), verts removed.
 #[derive(Clone, Debug, Default)]
 pub struct Op {
     /// (position, velocity, cloth, group).
-    pub new_nodes: Vec<(Vec3, Vec3, u16, u32)>,
+    pub new_nodes: Vec<NewNode>,
     /// (material coordinate, node id — old or new —, sizing metric).
     pub new_verts: Vec<(Vec2, usize, Mat2)>,
     pub remove_faces: Vec<usize>,
@@ -23,8 +23,8 @@ pub struct Op {
 impl Op {
     /// Applies the change; returns the ids of the added faces.
     pub fn apply(&self, w: &mut Work) -> Vec<usize> {
-        for &(x, v, c, g) in &self.new_nodes {
-            w.add_node(x, v, c, g);
+        for &n in &self.new_nodes {
+            w.add_node(n);
         }
         for &(u, node, m) in &self.new_verts {
             w.add_vert(u, node, m);
@@ -59,7 +59,7 @@ fn split_face(w: &Work, f: usize, a: usize, b: usize, p: usize, op: &mut Op) {
 }
 
 /// Split of material edge a–b at its midpoint (both sides of a seam with one new node). The
-/// new node's position and velocity interpolate the ends (linear, so the surface is unchanged).
+/// new node's position, velocity and acceleration interpolate the ends (linear, so the surface is unchanged).
 pub fn split(w: &Work, a: usize, b: usize) -> Option<Op> {
     let faces = w.edge_faces(a, b);
     if faces.is_empty() {
@@ -70,7 +70,13 @@ pub fn split(w: &Work, a: usize, b: usize) -> Option<Op> {
     let node = w.x.len();
     // A node between two nodes of one group joins it (ARCSim's `combine_label`).
     let group = if w.group[na] == w.group[nb] { w.group[na] } else { 0 };
-    op.new_nodes.push((0.5 * (w.x[na] + w.x[nb]), 0.5 * (w.v[na] + w.v[nb]), w.cloth[na], group));
+    op.new_nodes.push(NewNode {
+        x: 0.5 * (w.x[na] + w.x[nb]),
+        v: 0.5 * (w.v[na] + w.v[nb]),
+        a: 0.5 * (w.a[na] + w.a[nb]),
+        cloth: w.cloth[na],
+        group,
+    });
     let p = w.u.len();
     op.new_verts.push((0.5 * (w.u[a] + w.u[b]), node, 0.5 * (w.vsize[a] + w.vsize[b])));
     for &f in &faces {

@@ -29,6 +29,7 @@ fn cylinder(nx: usize, ny: usize) -> Mesh {
         mesh.nodes.push(Node {
             x: Vec3::new(r * a.cos(), r * a.sin(), vert.u.y),
             v: Vec3::zeros(),
+            a: Vec3::zeros(),
             mass: 0.0,
             cloth: 0,
         });

@@ -12,6 +12,7 @@ pub struct Work {
     pub valive: Vec<bool>,
     pub x: Vec<Vec3>,
     pub v: Vec<Vec3>,
+    pub a: Vec<Vec3>,
     pub cloth: Vec<u16>,
     pub nalive: Vec<bool>,
     /// Nodes that must survive (handles).
@@ -26,6 +27,17 @@ pub struct Work {
     pub vfaces: Vec<Vec<usize>>,
     /// Alive verts on each node (two or more on a seam).
     pub nverts: Vec<Vec<usize>>,
+}
+
+/// A node a split creates: position, velocity and acceleration interpolated, its cloth and
+/// group.
+#[derive(Clone, Copy, Debug)]
+pub struct NewNode {
+    pub x: Vec3,
+    pub v: Vec3,
+    pub a: Vec3,
+    pub cloth: u16,
+    pub group: u32,
 }
 
 /// What a face carries through remeshing besides its corners.
@@ -72,6 +84,7 @@ impl Work {
             valive: vec![true; nv],
             x: mesh.nodes.iter().map(|n| n.x).collect(),
             v: mesh.nodes.iter().map(|n| n.v).collect(),
+            a: mesh.nodes.iter().map(|n| n.a).collect(),
             cloth: mesh.nodes.iter().map(|n| n.cloth).collect(),
             nalive: vec![true; mesh.nodes.len()],
             pinned,
@@ -214,11 +227,12 @@ impl Work {
         }
     }
 
-    pub fn add_node(&mut self, x: Vec3, v: Vec3, cloth: u16, group: u32) -> usize {
-        self.group.push(group);
-        self.x.push(x);
-        self.v.push(v);
-        self.cloth.push(cloth);
+    pub fn add_node(&mut self, n: NewNode) -> usize {
+        self.group.push(n.group);
+        self.x.push(n.x);
+        self.v.push(n.v);
+        self.a.push(n.a);
+        self.cloth.push(n.cloth);
         self.nalive.push(true);
         self.pinned.push(false);
         self.nverts.push(Vec::new());
@@ -254,7 +268,7 @@ impl Work {
             if self.nalive[i] {
                 node_id[i] = mesh.nodes.len();
                 groups.push(self.group[i]);
-                mesh.nodes.push(Node { x: self.x[i], v: self.v[i], mass: 0.0, cloth: self.cloth[i] });
+                mesh.nodes.push(Node { x: self.x[i], v: self.v[i], a: self.a[i], mass: 0.0, cloth: self.cloth[i] });
             }
         }
         let mut vert_id = vec![usize::MAX; self.u.len()];

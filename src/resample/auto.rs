@@ -35,7 +35,7 @@ fn first_mesh(frame: &RunFrame) -> Result<Mesh, ResampleError> {
     let obj = &frame.obj;
     let mut mesh = Mesh::default();
     for p in &obj.positions {
-        mesh.nodes.push(Node { x: *p, v: Vec3::zeros(), mass: 0.0, cloth: 0 });
+        mesh.nodes.push(Node { x: *p, v: Vec3::zeros(), a: Vec3::zeros(), mass: 0.0, cloth: 0 });
     }
     let mut node_of_vt: Vec<Option<usize>> = vec![None; obj.texcoords.len()];
     for t in &obj.triangles {

@@ -144,13 +144,24 @@ pub struct Disabled {
     pub collision: bool,
     /// No pushing cloth back out of obstacles after a remesh.
     pub separation: bool,
+    /// No pop filter after a remesh (`sim::pop`).
+    pub pop_filter: bool,
 }
 
 impl Disabled {
     /// The names `disable` accepts, in the order of a step (ARCSim's module names, with
     /// `strain_limiting` for its `strainlimiting`).
-    pub const NAMES: [&'static str; 8] =
-        ["proximity", "physics", "strain_limiting", "lra", "collision", "remeshing", "separation", "plasticity"];
+    pub const NAMES: [&'static str; 9] = [
+        "proximity",
+        "physics",
+        "strain_limiting",
+        "lra",
+        "collision",
+        "remeshing",
+        "separation",
+        "pop_filter",
+        "plasticity",
+    ];
 }
 
 impl Scene {

@@ -49,7 +49,7 @@ pub struct SceneSpec {
     #[serde(default)]
     pub camera: Option<String>,
     /// Stages switched off: `proximity`, `physics`, `strain_limiting`, `lra`, `collision`,
-    /// `remeshing`, `separation` (ARCSim's `disable`).
+    /// `remeshing`, `separation`, `pop_filter`, `plasticity` (ARCSim's `disable`).
     #[serde(default)]
     pub disable: Vec<String>,
 }

@@ -131,10 +131,18 @@ impl Simulation {
         };
         let (finished, stats) = remesh(&self.state.mesh, vsize, preserved, &groups, &shapes, &damage, &limits)
             .map_err(|e| SimError::Mesh(format!("remeshing failed: {e}")))?;
-        if stats.splits + stats.collapses + stats.flips > 0 {
+        let changed = stats.splits + stats.collapses + stats.flips > 0;
+        if changed {
             self.adopt(finished)?;
         }
         self.ws.timers.since(Stage::Remesh, clock);
+        if changed && mode.is_adaptive() {
+            if let Some(pop) = self.pop_filter()? {
+                let tally = &mut self.ws.pop;
+                tally.iterations += pop.iterations;
+                tally.max_move = tally.max_move.max(pop.max_move);
+            }
+        }
         Ok(stats)
     }
 

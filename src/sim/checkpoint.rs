@@ -2,7 +2,7 @@
 //! bit-identically to an uninterrupted run.
 //!
 //! What is stored is the `SimState` (`state.rs`): the mesh (material coordinates, node
-//! positions, velocities, masses; the faces, from which edges are re-derived in the same
+//! positions, velocities, accelerations, masses; the faces, from which edges are re-derived in the same
 //! deterministic order), the rest dihedral angles, the faces' plastic state, the handles' node
 //! ids and switch-ons (when, and where their nodes were), the node pairs added to the system's
 //! sparsity pattern, time, step and frame counters. The `Workspace` is rebuilt from it and the scene.
@@ -24,7 +24,7 @@ use super::state::PlasticState;
 use super::SimState;
 
 const MAGIC: &[u8; 8] = b"VCLOTHCK";
-const FORMAT_VERSION: u32 = 6;
+const FORMAT_VERSION: u32 = 7;
 /// File names: `checkpoint_<frame>.bin`.
 const PREFIX: &str = "checkpoint_";
 const SUFFIX: &str = ".bin";
@@ -176,7 +176,7 @@ pub fn encode(run: &RunRecord, st: &SimState, stats: &RunStats) -> Vec<u8> {
     }
     w.usize(m.nodes.len());
     for n in &m.nodes {
-        n.x.iter().chain(n.v.iter()).for_each(|&c| w.f64(c));
+        n.x.iter().chain(n.v.iter()).chain(n.a.iter()).for_each(|&c| w.f64(c));
         w.f64(n.mass);
         w.u32(n.cloth as u32);
     }
@@ -285,13 +285,14 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
         let u = Vec2::new(r.f64()?, r.f64()?);
         mesh.verts.push(Vert { u, node: NodeId(r.u32()?) });
     }
-    let nn = r.count(60)?;
+    let nn = r.count(84)?;
     for _ in 0..nn {
         let x = Vec3::new(r.f64()?, r.f64()?, r.f64()?);
         let v = Vec3::new(r.f64()?, r.f64()?, r.f64()?);
+        let a = Vec3::new(r.f64()?, r.f64()?, r.f64()?);
         let mass = r.f64()?;
         let cloth = u16::try_from(r.u32()?).map_err(|_| "cloth index out of range")?;
-        mesh.nodes.push(Node { x, v, mass, cloth });
+        mesh.nodes.push(Node { x, v, a, mass, cloth });
     }
     let nf = r.count(16)?;
     for _ in 0..nf {

@@ -35,7 +35,7 @@
 
 use rayon::prelude::*;
 
-use crate::collision::proximity::Contact;
+use crate::collision::proximity::{contacts_energy, Contact};
 use crate::forces::handle::Spring;
 use crate::forces::material::Material;
 use crate::forces::membrane::{deformation_gradient, max_principal_strain};
@@ -166,20 +166,9 @@ fn all_finite(a: &[Vec3], b: &[Vec3]) -> bool {
     a.iter().chain(b).all(|p| p.iter().all(|c| c.is_finite()))
 }
 
-/// Repulsion energy Σ ½ k g² (g < 0) of the step's frozen contacts, cloth at `x`.
+/// Repulsion energy of the step's frozen contacts, cloth at `x`.
 fn contact_energy(c: &StepContext, x: &[Vec3]) -> Real {
-    let n = x.len();
-    c.contacts
-        .iter()
-        .map(|k| {
-            let g = k.gap(&k.nodes.map(|i| if i < n { x[i] } else { c.fixed[i - n] }));
-            if g < 0.0 {
-                0.5 * k.stiffness * g * g
-            } else {
-                0.0
-            }
-        })
-        .sum()
+    contacts_energy(c.contacts, x, c.fixed)
 }
 
 /// An upper estimate of the wind's work over the step: per face, the larger of its power at the

@@ -1,7 +1,7 @@
 //! The simulation: the scene (read-only), the state a checkpoint holds (`state`), the workspace
 //! derived from them (`workspace`), the step as a list of named, timed stages (`step`) with its
 //! fault checks (`checks`) and retries (`recover`), the plasticity stage (`plastic`), the
-//! remeshing stage (`adapt`), checkpoints and the run that writes frames (`run`).
+//! remeshing stage (`adapt`) and its pop filter (`pop`), checkpoints and the run that writes frames (`run`).
 
 mod adapt;
 pub mod checkpoint;
@@ -11,6 +11,7 @@ mod handles;
 pub mod interrupt;
 pub mod output;
 mod plastic;
+pub mod pop;
 pub mod progress;
 pub mod recover;
 mod run;

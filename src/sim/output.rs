@@ -215,7 +215,14 @@ fn frame_stats(sim: &mut Simulation, number: usize, adaptive: bool) -> FrameStat
     let mut fs = sim.measure(number);
     if adaptive {
         let r = std::mem::take(&mut sim.ws.remesh_stats);
-        fs.remesh = Some(RemeshFrameStats { splits: r.splits, flips: r.flips, collapses: r.collapses });
+        let pop = std::mem::take(&mut sim.ws.pop);
+        fs.remesh = Some(RemeshFrameStats {
+            splits: r.splits,
+            flips: r.flips,
+            collapses: r.collapses,
+            pop_iterations: pop.iterations,
+            pop_max_move: pop.max_move,
+        });
     }
     if sim.ws.collisions.is_some() {
         let clock = Instant::now();

@@ -152,7 +152,9 @@ impl Simulation {
             }
         }
         self.timed(Stage::FaultChecks, |s| checks::end_of_step(&s.context(&step), &solved, &x, &v))?;
-        self.commit(x, v, t1, step.stuck);
+        // The solve's acceleration (before collisions and constraints), as ARCSim keeps it.
+        let a = solved.v.iter().zip(&self.state.mesh.nodes).map(|(v, n)| (v - n.v) / step.h).collect();
+        self.commit(x, v, a, t1, step.stuck);
         if self.state.plastic.is_some() {
             self.timed(Stage::Plasticity, Simulation::plastic_update);
         }
@@ -396,11 +398,12 @@ impl Simulation {
     }
 
     /// Takes the checked end-of-step state.
-    fn commit(&mut self, x: Vec<Vec3>, v: Vec<Vec3>, t1: Real, stuck: Vec<[usize; 4]>) {
+    fn commit(&mut self, x: Vec<Vec3>, v: Vec<Vec3>, a: Vec<Vec3>, t1: Real, stuck: Vec<[usize; 4]>) {
         self.state.stuck = stuck;
-        for (node, (x, v)) in self.state.mesh.nodes.iter_mut().zip(x.into_iter().zip(v)) {
+        for (node, ((x, v), a)) in self.state.mesh.nodes.iter_mut().zip(x.into_iter().zip(v).zip(a)) {
             node.x = x;
             node.v = v;
+            node.a = a;
         }
         self.state.time = t1;
         self.state.steps += 1;

@@ -16,6 +16,7 @@ use crate::solver::pattern::BlockPattern;
 use crate::solver::ImplicitSystem;
 
 use super::constrain::Constraints;
+use super::pop::PopStats;
 use super::recover::FaultStats;
 use super::state::SimState;
 use super::timers::StageTimers;
@@ -37,6 +38,8 @@ pub struct Workspace {
     pub timers: StageTimers,
     pub counters: CollisionCounters,
     pub remesh_stats: RemeshStats,
+    /// The pop filter's work this frame (`pop.rs`).
+    pub pop: PopStats,
     pub faults: FaultStats,
     /// Present when a cloth has long range attachments or strain limits.
     pub constraints: Option<Constraints>,
@@ -62,6 +65,7 @@ impl Workspace {
             timers: StageTimers::default(),
             counters: CollisionCounters::default(),
             remesh_stats: RemeshStats::default(),
+            pop: PopStats::default(),
             faults: FaultStats::default(),
             constraints: Constraints::build(scene, state),
         })

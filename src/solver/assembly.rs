@@ -41,25 +41,54 @@ pub struct StepInput<'a> {
     pub fixed: &'a [Vec3],
 }
 
+/// How the element forces enter the system.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Scheme {
+    /// A backward-Euler step of size `StepInput::h` (the `solver` module doc).
+    Step,
+    /// A Newton step on the potential at fixed positions (the pop filter, `sim::pop`):
+    /// A = ∇²E, b = −∇E over the elastic, repulsion and handle-spring energies; no mass, gravity,
+    /// damping, velocities or wind. It is the step's system at h = 1 with those switched off.
+    Static,
+}
+
+impl Scheme {
+    /// The step size the terms are scaled by, and an element's damping coefficient.
+    fn h_and_damping(self, inp: &StepInput, damping: Real) -> (Real, Real) {
+        match self {
+            Scheme::Step => (inp.h, damping),
+            Scheme::Static => (1.0, 0.0),
+        }
+    }
+
+    /// Node `i`'s velocity as the terms see it.
+    fn velocity(self, inp: &StepInput, i: usize) -> Vec3 {
+        match self {
+            Scheme::Step => inp.mesh.nodes[i].v,
+            Scheme::Static => Vec3::zeros(),
+        }
+    }
+}
+
 struct Local<const N: usize, const M: usize> {
     energy: Real,
     rhs: nalgebra::SVector<Real, M>,
     mat: nalgebra::SMatrix<Real, M, M>,
 }
 
-fn face_local(inp: &StepInput, f: usize) -> Local<3, 9> {
+fn face_local(inp: &StepInput, scheme: Scheme, f: usize) -> Local<3, 9> {
     let mesh = inp.mesh;
     let ids = mesh.face_nodes(f);
     let x = ids.map(|n| mesh.nodes[n].x);
-    let v = ids.map(|n| mesh.nodes[n].v);
+    let v = ids.map(|n| scheme.velocity(inp, n));
     let m = &inp.materials[mesh.faces[f].material as usize];
-    let h = inp.h;
+    let (h, damping) = scheme.h_and_damping(inp, m.damping);
     let (energy, grad, hess) = m.stretch(&x, &inp.rest.membrane[f], Projection::Psd);
     let vl = Vec9::from_fn(|r, _| v[r / 3][r % 3]);
     // b = h(f − (α + h) K v), A = (hα + h²) K.
-    let mut rhs = -h * grad - h * (m.damping + h) * (hess * vl);
-    let mut mat = (h * m.damping + h * h) * hess;
-    if let Some(w) = inp.wind {
+    let mut rhs = -h * grad - h * (damping + h) * (hess * vl);
+    let mut mat = (h * damping + h * h) * hess;
+    if let Some(w) = inp.wind.filter(|_| scheme == Scheme::Step) {
         let (fw, dfdv) = wind_face(&x, &v, w);
         for i in 0..3 {
             for d in 0..3 {
@@ -74,15 +103,15 @@ fn face_local(inp: &StepInput, f: usize) -> Local<3, 9> {
     Local { energy, rhs, mat }
 }
 
-fn hinge_local(inp: &StepInput, k: usize) -> Local<4, 12> {
+fn hinge_local(inp: &StepInput, scheme: Scheme, k: usize) -> Local<4, 12> {
     let hinge = &inp.rest.hinges[k];
     let x = hinge.nodes.map(|n| inp.mesh.nodes[n].x);
     let m = &inp.materials[hinge.material];
-    let h = inp.h;
+    let (h, damping) = scheme.h_and_damping(inp, m.damping);
     let (energy, grad, hess) = m.bend(&x, hinge, Projection::Psd);
-    let vl = Vec12::from_fn(|r, _| inp.mesh.nodes[hinge.nodes[r / 3]].v[r % 3]);
-    let rhs = -h * grad - h * (m.damping + h) * (hess * vl);
-    let mat: Mat12 = (h * m.damping + h * h) * hess;
+    let vl = Vec12::from_fn(|r, _| scheme.velocity(inp, hinge.nodes[r / 3])[r % 3]);
+    let rhs = -h * grad - h * (damping + h) * (hess * vl);
+    let mat: Mat12 = (h * damping + h * h) * hess;
     Local { energy, rhs, mat }
 }
 
@@ -109,7 +138,21 @@ impl ImplicitSystem {
     /// repulsion); returns the elastic energy at the start of the step. `solve` adds the friction
     /// terms and the pinned nodes.
     pub fn assemble(&mut self, inp: &StepInput) -> Real {
-        let energy = self.assemble_base(inp);
+        let energy = self.assemble_base(inp, Scheme::Step);
+        self.base_saved = false;
+        energy
+    }
+
+    /// Assembles the static Newton system of the potential E (elastic, repulsion, springs) at
+    /// the mesh's positions, plus `mu` I, with `rhs` added to −∇E (`Scheme::Static`); returns
+    /// the elastic energy. `solve` (no terms) then gives the position change, pinned nodes
+    /// held where `inp.pinned` is their current velocity.
+    pub fn assemble_static(&mut self, inp: &StepInput, mu: Real, rhs: &[Vec3]) -> Real {
+        let energy = self.assemble_base(inp, Scheme::Static);
+        for (b, r) in rhs.iter().enumerate().take(self.pattern.nodes) {
+            self.blocks[self.pattern.col_start[b]] += Mat3::identity() * mu;
+            self.rhs[b] += r;
+        }
         self.base_saved = false;
         energy
     }
@@ -161,21 +204,24 @@ impl ImplicitSystem {
     }
 
     /// Fills `blocks` and `rhs`; returns the elastic energy.
-    fn assemble_base(&mut self, inp: &StepInput) -> Real {
+    fn assemble_base(&mut self, inp: &StepInput, scheme: Scheme) -> Real {
         let mesh = inp.mesh;
         self.blocks.iter_mut().for_each(|b| *b = Mat3::zeros());
-        for (r, n) in self.rhs.iter_mut().zip(&mesh.nodes) {
-            *r = inp.h * n.mass * inp.gravity;
-        }
-        for b in 0..self.pattern.nodes {
-            // The diagonal block is first in its column.
-            self.blocks[self.pattern.col_start[b]] += Mat3::identity() * mesh.nodes[b].mass;
+        self.rhs.iter_mut().for_each(|r| *r = Vec3::zeros());
+        if scheme == Scheme::Step {
+            for (r, n) in self.rhs.iter_mut().zip(&mesh.nodes) {
+                *r = inp.h * n.mass * inp.gravity;
+            }
+            for b in 0..self.pattern.nodes {
+                // The diagonal block is first in its column.
+                self.blocks[self.pattern.col_start[b]] += Mat3::identity() * mesh.nodes[b].mass;
+            }
         }
         let mut energy = 0.0;
         let nf = mesh.faces.len();
         for start in (0..nf).step_by(CHUNK) {
             let locals: Vec<Local<3, 9>> =
-                (start..(start + CHUNK).min(nf)).into_par_iter().map(|f| face_local(inp, f)).collect();
+                (start..(start + CHUNK).min(nf)).into_par_iter().map(|f| face_local(inp, scheme, f)).collect();
             for (k, local) in locals.iter().enumerate() {
                 let f = start + k;
                 energy += local.energy;
@@ -185,7 +231,7 @@ impl ImplicitSystem {
         let nh = inp.rest.hinges.len();
         for start in (0..nh).step_by(CHUNK) {
             let locals: Vec<Local<4, 12>> =
-                (start..(start + CHUNK).min(nh)).into_par_iter().map(|k| hinge_local(inp, k)).collect();
+                (start..(start + CHUNK).min(nh)).into_par_iter().map(|k| hinge_local(inp, scheme, k)).collect();
             for (j, local) in locals.iter().enumerate() {
                 let k = start + j;
                 energy += local.energy;
@@ -198,28 +244,28 @@ impl ImplicitSystem {
                 );
             }
         }
-        self.add_contacts(inp);
-        self.add_springs(inp);
+        self.add_contacts(inp, scheme);
+        self.add_springs(inp, scheme);
         energy
     }
 
     /// Soft handles enter like elastic elements without damping (ARCSim's
     /// `add_constraint_forces`): A += h² ∇²E, b += −h (∇E + h ∇²E v).
-    fn add_springs(&mut self, inp: &StepInput) {
-        let h = inp.h;
+    fn add_springs(&mut self, inp: &StepInput, scheme: Scheme) {
+        let (h, _) = scheme.h_and_damping(inp, 0.0);
         let nodes = &inp.mesh.nodes;
         for spring in inp.springs {
             match *spring {
                 Spring::Anchor { node, target, k } => {
                     let (_, grad, hess) = anchor_spring(&nodes[node].x, &target, k);
-                    self.rhs[node] -= h * (grad + h * (hess * nodes[node].v));
+                    self.rhs[node] -= h * (grad + h * (hess * scheme.velocity(inp, node)));
                     self.blocks[self.pattern.col_start[node]] += h * h * hess;
                 }
                 Spring::Glue { nodes: [a, b], k } => {
                     let (_, grad, hess) = glue_spring(&nodes[a].x, &nodes[b].x, k);
                     let mut vl = nalgebra::SVector::<Real, 6>::zeros();
-                    vl.fixed_rows_mut::<3>(0).copy_from(&nodes[a].v);
-                    vl.fixed_rows_mut::<3>(3).copy_from(&nodes[b].v);
+                    vl.fixed_rows_mut::<3>(0).copy_from(&scheme.velocity(inp, a));
+                    vl.fixed_rows_mut::<3>(3).copy_from(&scheme.velocity(inp, b));
                     let rhs = -h * (grad + h * (hess * vl));
                     self.rhs[a] += rhs.fixed_rows::<3>(0);
                     self.rhs[b] += rhs.fixed_rows::<3>(3);
@@ -251,9 +297,9 @@ impl ImplicitSystem {
     /// a majorizer: K_c = k (w wᵀ) ⊗ (n nᵀ) and, for the m cloth nodes of the contact,
     /// (Σᵢ wᵢ xᵢ·n)² ≤ m Σᵢ wᵢ² (xᵢ·n)² (Cauchy–Schwarz), so m · blockdiag(K_c) ⪰ K_c: the
     /// system stays SPD and the step is at least as stiff as with the full block.
-    fn add_contacts(&mut self, inp: &StepInput) {
+    fn add_contacts(&mut self, inp: &StepInput, scheme: Scheme) {
         let n = inp.mesh.nodes.len();
-        let h = inp.h;
+        let (h, _) = scheme.h_and_damping(inp, 0.0);
         for c in inp.contacts {
             let pos = c.nodes.map(|i| if i < n { inp.mesh.nodes[i].x } else { inp.fixed[i - n] });
             let (_, grad, hess) = repulsion(c, &pos);
@@ -263,7 +309,7 @@ impl ImplicitSystem {
             let vl = Vec12::from_fn(|r, _| {
                 let i = c.nodes[r / 3];
                 if i < n {
-                    inp.mesh.nodes[i].v[r % 3]
+                    scheme.velocity(inp, i)[r % 3]
                 } else {
                     0.0
                 }

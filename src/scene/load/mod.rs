@@ -165,6 +165,7 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
         physics: off.contains(&"physics"),
         collision: off.contains(&"collision"),
         separation: off.contains(&"separation"),
+        pop_filter: off.contains(&"pop_filter"),
     };
     // Obstacles first: handles may follow one.
     for (o, os) in spec.obstacles.iter().enumerate() {
@@ -426,7 +427,7 @@ fn add_cloth(ctx: &Ctx, scene: &mut Scene, c: usize, cs: &ClothSpec) -> Res<()> 
     let (node0, vert0) = (scene.mesh.nodes.len(), scene.mesh.verts.len());
     let name = cs.name.clone().unwrap_or_else(|| format!("cloth{c}"));
     for n in &local.nodes {
-        scene.mesh.nodes.push(Node { x: xf.apply(&n.x), v: velocity, mass: 0.0, cloth: c as u16 });
+        scene.mesh.nodes.push(Node { x: xf.apply(&n.x), v: velocity, a: Vec3::zeros(), mass: 0.0, cloth: c as u16 });
     }
     for v in &local.verts {
         scene.mesh.verts.push(Vert { u: v.u, node: NodeId(v.node.0 + node0 as u32) });
@@ -452,7 +453,7 @@ fn mesh_from_obj(file: &Path, d: &ObjData, uv_scale: f64) -> Res<Mesh> {
         |line: usize, msg: String| InputError { file: file.to_path_buf(), location: Some(format!("line {line}")), msg };
     let mut mesh = Mesh::default();
     for p in &d.positions {
-        mesh.nodes.push(Node { x: *p, v: Vec3::zeros(), mass: 0.0, cloth: 0 });
+        mesh.nodes.push(Node { x: *p, v: Vec3::zeros(), a: Vec3::zeros(), mass: 0.0, cloth: 0 });
     }
     let has_vt = d.triangles[0][0].vt.is_some();
     if has_vt {

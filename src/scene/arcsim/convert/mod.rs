@@ -361,9 +361,10 @@ impl Conv<'_> {
                 "collision" => "collision",
                 "remeshing" => "remeshing",
                 "separation" => "separation",
+                "popfilter" => "pop_filter",
                 "plasticity" => "plasticity",
-                // ARCSim's stages that viewcloth does not have: nothing to switch off.
-                other @ ("popfilter" | "fracture") => {
+                // ARCSim's stage that viewcloth does not have: nothing to switch off.
+                other @ "fracture" => {
                     if !absent.contains(&other.to_string()) {
                         absent.push(other.to_string());
                     }
