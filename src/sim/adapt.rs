@@ -178,7 +178,7 @@ impl Simulation {
         self.ws.remeshed(state, &self.scene.materials)?;
         self.constraints_remeshed();
         if !self.scene.disabled.separation {
-            self.push_out(None)?;
+            self.push_out(Real::INFINITY)?;
         }
         Ok(())
     }

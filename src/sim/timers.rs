@@ -46,6 +46,8 @@ pub enum Stage {
     StrainLimit,
     /// The plastic update at the end of a step (`plastic.rs`).
     Plasticity,
+    /// Moving cloth that started inside obstacles out (`separate.rs`).
+    Separation,
 }
 
 impl Stage {
@@ -70,6 +72,7 @@ impl Stage {
             Stage::Lra => "lra",
             Stage::StrainLimit => "strain_limit",
             Stage::Plasticity => "plasticity",
+            Stage::Separation => "separation",
         }
     }
 }

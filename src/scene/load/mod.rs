@@ -7,7 +7,7 @@ use super::material::resolve;
 use super::spec::{ClothSpec, CollisionSpec, KeyframeSpec, MotSpec, SceneSpec, TransformSpec};
 use super::{Cloth, Disabled, Scene};
 use crate::camera::Camera;
-use crate::collision::params::CollisionParams;
+use crate::collision::params::{CollisionParams, InitialIntersections};
 use crate::error::InputError;
 use crate::forces::wind::Wind;
 use crate::io::obj::{read_obj, ObjData};
@@ -261,6 +261,16 @@ fn collision_params(ctx: &Ctx, spec: Option<&CollisionSpec>) -> Res<CollisionPar
     }
     if let Some(t) = c.push_out_tolerance {
         p.push_out_tolerance = non_negative(ctx, "collision.push_out_tolerance", t)?;
+    }
+    if let Some(mode) = &c.initial_intersections {
+        p.initial_intersections = match mode.as_str() {
+            "resolve" => InitialIntersections::Resolve,
+            "refuse" => InitialIntersections::Refuse,
+            other => {
+                let msg = format!("expected \"resolve\" or \"refuse\", got \"{other}\"");
+                return Err(ctx.err("collision.initial_intersections", msg));
+            }
+        };
     }
     Ok(p)
 }

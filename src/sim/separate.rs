@@ -1,0 +1,81 @@
+//! The separation stage (issue 18, "Hard starts"): cloth that starts deeper inside an obstacle
+//! than `collision.push_out_tolerance`, or inside two obstacles that overlap, is moved out over
+//! the first steps instead of being refused at load.
+//!
+//! ARCSim resolves a start where cloth and obstacles intersect in one go (`separateobs.cpp`): an
+//! augmented-Lagrangian solve for the smallest mass-weighted displacement of the *obstacle*
+//! nodes from their pose that separates every intersecting face pair by 1 mm, the obstacle then
+//! easing back into its pose; it exits when that does not converge in 100 iterations (as it
+//! cannot for cloth inside two obstacles that overlap, where no displacement separates both).
+//! Here the obstacles are prescribed and stay where the scene puts them; the cloth moves. A start
+//! that is centimetres deep cannot be separated in one go without tearing elements, and a node
+//! inside two obstacles that overlap has no outside position at all. So each step, before the
+//! physics, every free node inside an obstacle takes one bounded gradient step on the
+//! separation objective
+//!
+//!   Φ(x) = ½ Σ_b ‖x − (p_b + τ n_b)‖² over the bodies b with signed distance φ_b(x) < 0,
+//!
+//! (p_b the closest point on b, n_b its outward normal, τ the repulsion thickness; p_b and n_b
+//! held fixed over the step): Δx = −∇Φ,
+//! shortened to at most `SEPARATION_STEP` × τ. Inside one body this walks the node out to τ
+//! from the surface; inside two that overlap, the pushes of both are summed and the node comes
+//! to rest where they balance, between the two surfaces (the least-squares compromise of the
+//! two outside positions). The move is a projection, not a force: the velocity
+//! keeps no part of it, and loses any component against it (inelastic), so the stage adds no
+//! kinetic energy, and the step's fault checks judge the physics that follows unchanged. The
+//! stage switches itself off at the first step that finds no node inside any obstacle.
+
+use crate::math::{Real, Vec3};
+
+use super::Simulation;
+
+/// Largest separation move of a node in one step, in repulsion thicknesses: below one
+/// thickness a move cannot carry a node past cloth it is in contact with.
+pub const SEPARATION_STEP: Real = 0.5;
+
+impl Simulation {
+    /// One separation step (see the module doc), while `SimState::separating`. Returns how
+    /// many nodes moved.
+    pub(super) fn separate(&mut self) -> usize {
+        let Some(world) = &self.ws.collisions else { return 0 };
+        if !self.state.separating {
+            return 0;
+        }
+        let th = world.params.thickness;
+        let t = self.state.time;
+        let x = self.state.mesh.positions();
+        let mut push = vec![Vec3::zeros(); x.len()];
+        let mut inside = vec![false; x.len()];
+        for b in (0..world.bodies.len()).filter(|&b| world.present(b, t)) {
+            let hits = world.with_sdf(b, t, |sdf| sdf.query_inside(&x));
+            for (i, q) in hits.into_iter().enumerate() {
+                let Some(q) = q else { continue };
+                push[i] += q.point + q.normal * th - x[i];
+                inside[i] = true;
+            }
+        }
+        let mut held = vec![false; x.len()];
+        self.state.handle_nodes.iter().flatten().for_each(|&i| held[i] = true);
+        let limit = SEPARATION_STEP * th;
+        let mut moved = 0;
+        for (i, node) in self.state.mesh.nodes.iter_mut().enumerate() {
+            if !inside[i] || held[i] || node.mass <= 0.0 {
+                continue;
+            }
+            let d = push[i];
+            let len = d.norm();
+            if len == 0.0 {
+                continue;
+            }
+            let dx = if len > limit { d * (limit / len) } else { d };
+            node.x += dx;
+            let into = node.v.dot(&d) / len;
+            if into < 0.0 {
+                node.v -= d * (into / len);
+            }
+            moved += 1;
+        }
+        self.state.separating = inside.iter().any(|&k| k);
+        moved
+    }
+}
