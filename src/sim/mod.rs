@@ -112,22 +112,36 @@ impl Simulation {
 
     /// Nodes inside an obstacle are moved out along its surface normal to the repulsion
     /// thickness: at load for garments registered slightly inside a body, and after a remesh
-    /// (`tolerance` infinite). Nodes deeper than `tolerance` stay where they are for the
-    /// separation stage, or are an error when the scene refuses initial intersections.
-    /// Returns how many nodes moved and how many were too deep.
+    /// (`tolerance` infinite). Nodes deeper than `tolerance`, and nodes inside two obstacles
+    /// (pushed out of one they would land in the other), stay where they are for the separation
+    /// stage, or (deeper than `tolerance`) are an error when the scene refuses initial
+    /// intersections. Returns how many nodes moved and how many were left inside.
     fn push_out(&mut self, tolerance: Real) -> Result<(usize, usize), SimError> {
         let Some(world) = &self.ws.collisions else { return Ok((0, 0)) };
         let th = world.params.thickness;
         let refuse = world.params.initial_intersections == InitialIntersections::Refuse;
-        let (mut pushed, mut deep) = (0, 0);
-        for b in (0..world.bodies.len()).filter(|&b| world.present(b, self.state.time)) {
+        let t = self.state.time;
+        let x = self.state.mesh.positions();
+        let hits: Vec<(usize, Vec<_>)> = (0..world.bodies.len())
+            .filter(|&b| world.present(b, t))
+            .map(|b| (b, world.with_sdf(b, t, |sdf| sdf.query_inside(&x))))
+            .collect();
+        let mut bodies_inside = vec![0usize; x.len()];
+        for (_, h) in &hits {
+            for (i, q) in h.iter().enumerate() {
+                bodies_inside[i] += q.is_some() as usize;
+            }
+        }
+        let (mut pushed, mut left) = (0, 0);
+        for (b, h) in hits {
             let mut too_deep = vec![0usize; self.scene.cloths.len()];
             let mut moves = Vec::new();
-            let inside = world.with_sdf(b, self.state.time, |sdf| sdf.query_inside(&self.state.mesh.positions()));
-            for (i, (node, q)) in self.state.mesh.nodes.iter().zip(inside).enumerate() {
+            for (i, (node, q)) in self.state.mesh.nodes.iter().zip(h).enumerate() {
                 let Some(q) = q else { continue };
                 if -q.distance > tolerance {
                     too_deep[node.cloth as usize] += 1;
+                } else if bodies_inside[i] > 1 && !refuse {
+                    left += 1;
                 } else {
                     moves.push((i, q.point + q.normal * th));
                 }
@@ -142,13 +156,13 @@ impl Simulation {
                     ),
                 }));
             }
-            deep += too_deep.iter().sum::<usize>();
+            left += too_deep.iter().sum::<usize>();
             pushed += moves.len();
             for (i, p) in moves {
                 self.state.mesh.nodes[i].x = p;
             }
         }
-        Ok((pushed, deep))
+        Ok((pushed, left))
     }
 
     /// Elastic energy (membrane + bending) of the current state.

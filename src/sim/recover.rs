@@ -95,6 +95,10 @@ impl Simulation {
     /// One step of size `h`, with fault handling (see the module doc), after the separation
     /// stage while cloth that started inside an obstacle is not out yet (`separate.rs`).
     pub fn step(&mut self, h: Real) -> Result<(), SimError> {
+        self.ws.trapped.clear();
+        if let Some(world) = &mut self.ws.collisions {
+            world.exempt.clear();
+        }
         if self.state.separating && !self.scene.disabled.separation {
             self.timed(Stage::Separation, Simulation::separate);
         }

@@ -18,12 +18,17 @@
 //! (p_b the closest point on b, n_b its outward normal, τ the repulsion thickness; p_b and n_b
 //! held fixed over the step): Δx = −∇Φ,
 //! shortened to at most `SEPARATION_STEP` × τ. Inside one body this walks the node out to τ
-//! from the surface; inside two that overlap, the pushes of both are summed and the node comes
-//! to rest where they balance, between the two surfaces (the least-squares compromise of the
-//! two outside positions). The move is a projection, not a force: the velocity
+//! from the surface. Inside two that overlap there is no outside position, and the gradient of Φ
+//! (or of the squared depths) points along the sum of both normals: out of the overlap
+//! sideways, which drags the cloth there into the overlap's rim (a sheet between two spheres
+//! stretched 60%). So a node inside two obstacles is not moved but *trapped*: held still for
+//! the step, like a node of a handle (`Workspace::trapped`), the pinch of the two obstacles
+//! gripping it; it takes no repulsion or impact it could not satisfy, and the cloth around it
+//! hangs from it. The move is a projection, not a force: the velocity
 //! keeps no part of it, and loses any component against it (inelastic), so the stage adds no
 //! kinetic energy, and the step's fault checks judge the physics that follows unchanged. The
-//! stage switches itself off at the first step that finds no node inside any obstacle.
+//! stage switches itself off at the first step that finds no node inside any obstacle (never,
+//! while nodes are trapped).
 
 use crate::math::{Real, Vec3};
 
@@ -45,13 +50,13 @@ impl Simulation {
         let t = self.state.time;
         let x = self.state.mesh.positions();
         let mut push = vec![Vec3::zeros(); x.len()];
-        let mut inside = vec![false; x.len()];
+        let mut inside = vec![0usize; x.len()];
         for b in (0..world.bodies.len()).filter(|&b| world.present(b, t)) {
             let hits = world.with_sdf(b, t, |sdf| sdf.query_inside(&x));
             for (i, q) in hits.into_iter().enumerate() {
                 let Some(q) = q else { continue };
                 push[i] += q.point + q.normal * th - x[i];
-                inside[i] = true;
+                inside[i] += 1;
             }
         }
         let mut held = vec![false; x.len()];
@@ -59,7 +64,7 @@ impl Simulation {
         let limit = SEPARATION_STEP * th;
         let mut moved = 0;
         for (i, node) in self.state.mesh.nodes.iter_mut().enumerate() {
-            if !inside[i] || held[i] || node.mass <= 0.0 {
+            if inside[i] != 1 || held[i] || node.mass <= 0.0 {
                 continue;
             }
             let d = push[i];
@@ -75,7 +80,11 @@ impl Simulation {
             }
             moved += 1;
         }
-        self.state.separating = inside.iter().any(|&k| k);
+        self.ws.trapped = (0..x.len()).filter(|&i| inside[i] > 1).collect();
+        if let Some(world) = &mut self.ws.collisions {
+            world.exempt = inside.iter().map(|&k| k > 1).collect();
+        }
+        self.state.separating = inside.iter().any(|&k| k > 0);
         moved
     }
 }
