@@ -51,7 +51,7 @@ enum Start {
     /// Squeezed inside two obstacles that overlap: where the cloth is inside both there is no
     /// outside position, so it may stay inside both (and cross both surfaces around there),
     /// but from this frame on no node is deeper than thickness / 2 inside only one of them,
-    /// and every crossing of an obstacle is by a triangle with a node inside both.
+    /// and every crossing of an obstacle is by a triangle with a node inside both (trapped).
     OverlapFrom(usize),
 }
 
@@ -127,9 +127,9 @@ fn self_intersections(sim: &Simulation) -> usize {
         .count()
 }
 
-/// Per cloth node, how many obstacles it is deeper than thickness / 2 inside of (the
-/// definition of `Simulation::penetrations`, per node).
-fn inside_counts(sim: &Simulation) -> Vec<usize> {
+/// Per cloth node, how many obstacles it is deeper than `depth` × thickness inside of (with
+/// `depth` ½, the definition of `Simulation::penetrations`, per node).
+fn inside_counts(sim: &Simulation, depth: Real) -> Vec<usize> {
     let x = sim.state.mesh.positions();
     let mut count = vec![0; x.len()];
     let Some(world) = sim.collisions() else { return count };
@@ -137,7 +137,7 @@ fn inside_counts(sim: &Simulation) -> Vec<usize> {
     for b in (0..world.bodies.len()).filter(|&b| world.present(b, t)) {
         let hits = world.with_sdf(b, t, |sdf| sdf.query_inside(&x));
         for (i, q) in hits.into_iter().enumerate() {
-            count[i] += q.is_some_and(|q| q.distance < -0.5 * th) as usize;
+            count[i] += q.is_some_and(|q| q.distance < -depth * th) as usize;
         }
     }
     count
@@ -195,7 +195,7 @@ fn run(s: &Stress) -> Result<(usize, usize), String> {
         if f < from {
             continue;
         }
-        let inside = inside_counts(&sim);
+        let inside = inside_counts(&sim, 0.5);
         let alone = inside.iter().filter(|&&k| k == 1).count();
         let both = inside.iter().filter(|&&k| k > 1).count();
         if alone > 0 || (both > 0 && !matches!(s.start, Start::OverlapFrom(_))) {
@@ -212,7 +212,8 @@ fn run(s: &Stress) -> Result<(usize, usize), String> {
         // (in an overlap: only triangles with a node inside both obstacles).
         let c = sim.crossings();
         let m = &sim.state.mesh;
-        let in_overlap = |t: usize| m.face_nodes(t).iter().any(|&n| inside[n] > 1);
+        let trapped = inside_counts(&sim, 0.0);
+        let in_overlap = |t: usize| m.face_nodes(t).iter().any(|&n| trapped[n] > 1);
         let obstacle = c.obstacle.iter().filter(|&&(t, _)| !in_overlap(t)).count();
         if !c.cloth.is_empty() || obstacle > 0 {
             return Err(format!("{what}: crossing triangle pairs: {} cloth–cloth, {obstacle} cloth–obstacle", c.cloth.len()));
