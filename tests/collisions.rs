@@ -456,7 +456,8 @@ fn sheet_10_cm_inside_a_box_is_refused_naming_cloth_and_obstacle_when_the_scene_
 
 /// Issue 18, "Hard starts": by default the same sheet 3 cm inside the box is not refused; the
 /// separation stage walks it out (at most half a thickness per step, so 35 mm take 14 steps)
-/// and it stays out, without the energy rising beyond its gravitational drop.
+/// and it stays out, its energy rising by no more than the work of lifting it 35 mm (+10%):
+/// no kick (with repulsion acting on the nodes still inside, it flew 6 cm above the box).
 #[test]
 fn sheet_3_cm_inside_a_box_is_separated_over_the_first_steps_by_default() {
     let scene = inline_scene(&sheet_in_box(0.03), Path::new("."), "separate");
@@ -468,7 +469,8 @@ fn sheet_3_cm_inside_a_box_is_separated_over_the_first_steps_by_default() {
     for f in 1..=6 {
         sim.advance_frame().unwrap();
         let e = sim.measure(f).total_energy.unwrap();
-        assert!(e <= e0 + mass * 9.81 * 0.05, "frame {f}: energy {e} J from {e0} J");
+        let lift = mass * 9.81 * (0.03 + 0.005);
+        assert!(e <= e0 + 1.1 * lift, "frame {f}: energy {e} J from {e0} J (lift {lift} J)");
         if f >= 2 {
             assert!(!sim.state.separating, "frame {f}: still separating");
             assert_no_penetration(&sim, &format!("separated sheet frame {f}"));

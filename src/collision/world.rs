@@ -68,8 +68,8 @@ pub struct CollisionWorld {
     broad: BroadPhase,
     /// Per body, its signed distance field as of the last query (`with_sdf`); empty until then.
     sdfs: Vec<Mutex<Option<BodySdf>>>,
-    /// Cloth nodes whose elements take no obstacle contact or impact (nodes trapped inside two
-    /// obstacles that overlap, `sim::separate`): no position of theirs satisfies both.
+    /// Cloth nodes whose elements take no obstacle contact or impact: nodes inside an obstacle
+    /// while `sim::separate` moves them out (or holds them, inside two that overlap).
     pub exempt: Vec<bool>,
 }
 
