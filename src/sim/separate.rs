@@ -25,11 +25,13 @@
 //! the step, like a node of a handle (`Workspace::trapped`), the pinch of the two obstacles
 //! gripping it, and the cloth around it hangs from it.
 //!
-//! A node inside an obstacle takes no repulsion or impact from obstacles for the step
-//! (`CollisionWorld::exempt`): this stage moves it. A repulsion penalty on a node centimetres
-//! deep stores ½ k d², which the solve releases as a kick (a sheet separated from 3 cm inside a
-//! box flew 6 cm above it), and an impact with a face it already crosses has no solution (the
-//! impact-zone cap). The move is a projection, not a force: the velocity
+//! A node deeper than τ inside an obstacle, or inside two, takes no repulsion or impact from
+//! obstacles for the step (`CollisionWorld::exempt`): this stage moves it. A repulsion penalty
+//! on a node centimetres deep stores ½ k d², which the solve releases as a kick (a sheet
+//! separated from 3 cm inside a box flew 6 cm above it), and an impact with a face it already
+//! crosses has no solution (the impact-zone cap). Within τ of the surface the repulsion acts as
+//! it does on any contact: without it, cloth under tension (a stretched waistband) is pulled
+//! back in as fast as the stage pushes it out. The move is a projection, not a force: the velocity
 //! keeps no part of it, and loses any component against it (inelastic), so the stage adds no
 //! kinetic energy, and the step's fault checks judge the physics that follows unchanged. The
 //! stage switches itself off at the first step that finds no node inside any obstacle (never,
@@ -56,16 +58,21 @@ impl Simulation {
         let x = self.state.mesh.positions();
         let mut push = vec![Vec3::zeros(); x.len()];
         let mut inside = vec![0usize; x.len()];
+        let mut deep = vec![false; x.len()];
         for b in (0..world.bodies.len()).filter(|&b| world.present(b, t)) {
             let hits = world.with_sdf(b, t, |sdf| sdf.query_inside(&x));
             for (i, q) in hits.into_iter().enumerate() {
                 let Some(q) = q else { continue };
                 push[i] += q.point + q.normal * th - x[i];
                 inside[i] += 1;
+                deep[i] |= -q.distance > th;
             }
         }
+        // Nodes of handles that are on follow them; a handle that switches on later anchors its
+        // nodes where the separation has put them.
         let mut held = vec![false; x.len()];
-        self.state.handle_nodes.iter().flatten().for_each(|&i| held[i] = true);
+        let on = self.state.handle_nodes.iter().zip(&self.state.handle_on).filter(|(_, on)| on.is_some());
+        on.flat_map(|(nodes, _)| nodes).for_each(|&i| held[i] = true);
         let limit = SEPARATION_STEP * th;
         let mut moved = 0;
         for (i, node) in self.state.mesh.nodes.iter_mut().enumerate() {
@@ -87,7 +94,7 @@ impl Simulation {
         }
         self.ws.trapped = (0..x.len()).filter(|&i| inside[i] > 1).collect();
         if let Some(world) = &mut self.ws.collisions {
-            world.exempt = inside.iter().map(|&k| k > 0).collect();
+            world.exempt = inside.iter().zip(&deep).map(|(&k, &d)| k > 1 || d).collect();
         }
         self.state.separating = inside.iter().any(|&k| k > 0);
         moved
