@@ -448,7 +448,9 @@ fn sheet_10_cm_inside_a_box_is_refused_naming_cloth_and_obstacle_when_the_scene_
     assert_eq!(o.status.code(), Some(2), "{err}");
     assert_eq!(err.lines().count(), 1, "one line: {err}");
     assert!(!err.contains("panicked"), "{err}");
-    for part in ["deep.json", "cloths[0]", "'sheet'", "'block'", "169 nodes", "push_out_tolerance", "initial_intersections"] {
+    for part in
+        ["deep.json", "cloths[0]", "'sheet'", "'block'", "169 nodes", "push_out_tolerance", "initial_intersections"]
+    {
         assert!(err.contains(part), "missing {part:?} in: {err}");
     }
     assert!(!out.join("frame_0000.obj").exists(), "nothing is written for a refused scene");

@@ -60,23 +60,79 @@ fn keep(_: &mut Value) {}
 fn stresses() -> Vec<Stress> {
     vec![
         // Membrane ×10⁴ and bending ×10³ of cotton, hanging from two corners.
-        Stress { file: "stiff.json", frames: 25, edit: keep, strain_bound: 0.01, drive_speed: 0.0, start: Start::Clear },
+        Stress {
+            file: "stiff.json",
+            frames: 25,
+            edit: keep,
+            strain_bound: 0.01,
+            drive_speed: 0.0,
+            start: Start::Clear,
+        },
         // The stiff drape at h = 1/24 s: one linearised step misses the stretch of the large
         // rotation (energy 1.5 J → 120 J without fault handling); retries keep it bounded.
-        Stress { file: "one_step_per_frame.json", frames: 48, edit: keep, strain_bound: 0.05, drive_speed: 0.0, start: Start::Clear },
+        Stress {
+            file: "one_step_per_frame.json",
+            frames: 48,
+            edit: keep,
+            strain_bound: 0.05,
+            drive_speed: 0.0,
+            start: Start::Clear,
+        },
         // A 16 cm sphere at 20 m/s into a sheet hanging from two corners (CCD across 4 cm steps).
-        Stress { file: "sphere_bullet.json", frames: 20, edit: keep, strain_bound: 1.5, drive_speed: 20.0, start: Start::Clear },
+        Stress {
+            file: "sphere_bullet.json",
+            frames: 20,
+            edit: keep,
+            strain_bound: 1.5,
+            drive_speed: 20.0,
+            start: Start::Clear,
+        },
         // A 50 cm sheet on a floor, crushed between two plates to a 5 cm gap (10% of its width).
-        Stress { file: "crush.json", frames: 38, edit: keep, strain_bound: 1.0, drive_speed: 0.35, start: Start::Clear },
+        Stress {
+            file: "crush.json",
+            frames: 38,
+            edit: keep,
+            strain_bound: 1.0,
+            drive_speed: 0.35,
+            start: Start::Clear,
+        },
         // A 1 m strip flicked up and down by a handle reaching 30 m/s.
         Stress { file: "whip.json", frames: 15, edit: keep, strain_bound: 0.6, drive_speed: 31.0, start: Start::Clear },
         // A mesh with slivers (angles down to 3·10⁻⁴ degrees) and near-zero-area faces.
-        Stress { file: "slivers.json", frames: 25, edit: keep, strain_bound: 0.3, drive_speed: 0.0, start: Start::Clear },
+        Stress {
+            file: "slivers.json",
+            frames: 25,
+            edit: keep,
+            strain_bound: 0.3,
+            drive_speed: 0.0,
+            start: Start::Clear,
+        },
         // Adaptive remeshing with size_min 1 mm (the reference scenes use 10 mm) onto a ball.
-        Stress { file: "adaptive_fine.json", frames: 12, edit: keep, strain_bound: 0.6, drive_speed: 0.0, start: Start::Clear },
+        Stress {
+            file: "adaptive_fine.json",
+            frames: 12,
+            edit: keep,
+            strain_bound: 0.6,
+            drive_speed: 0.0,
+            start: Start::Clear,
+        },
         // 15 g/m² tissue and 1.2 kg/m² leather falling onto a ball.
-        Stress { file: "tissue.json", frames: 20, edit: keep, strain_bound: 0.3, drive_speed: 0.0, start: Start::Clear },
-        Stress { file: "leather.json", frames: 20, edit: keep, strain_bound: 0.2, drive_speed: 0.0, start: Start::Clear },
+        Stress {
+            file: "tissue.json",
+            frames: 20,
+            edit: keep,
+            strain_bound: 0.3,
+            drive_speed: 0.0,
+            start: Start::Clear,
+        },
+        Stress {
+            file: "leather.json",
+            frames: 20,
+            edit: keep,
+            strain_bound: 0.2,
+            drive_speed: 0.0,
+            start: Start::Clear,
+        },
         // Issue 18, hard starts. A 40 cm sheet whose middle lies inside two 10 cm spheres that
         // overlap by 2 cm (the lens around it 4.4 cm in radius).
         Stress {
@@ -216,7 +272,10 @@ fn run(s: &Stress) -> Result<(usize, usize), String> {
         let in_overlap = |t: usize| m.face_nodes(t).iter().any(|&n| trapped[n] > 1);
         let obstacle = c.obstacle.iter().filter(|&&(t, _)| !in_overlap(t)).count();
         if !c.cloth.is_empty() || obstacle > 0 {
-            return Err(format!("{what}: crossing triangle pairs: {} cloth–cloth, {obstacle} cloth–obstacle", c.cloth.len()));
+            return Err(format!(
+                "{what}: crossing triangle pairs: {} cloth–cloth, {obstacle} cloth–obstacle",
+                c.cloth.len()
+            ));
         }
     }
     Ok((retries, retried_frames))
