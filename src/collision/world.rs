@@ -384,7 +384,7 @@ impl CollisionWorld {
             let (a, b) = (nodes.map(p0), nodes.map(p1));
             let hit =
                 if kind == VF { vertex_face_ccd(&a, &b, CCD_TOLERANCE) } else { edge_edge_ccd(&a, &b, CCD_TOLERANCE) };
-            let imp = hit.map(|imp| outside_obstacle(imp, &nodes, n, &outward))?;
+            let imp = hit.map(|imp| outside_obstacle(imp, &nodes, n, outward))?;
             // Cloth leaving an obstacle it was inside of has nothing to be stopped.
             let obstacle = nodes.iter().any(|&i| i >= n);
             let sep = |x: &[Vec3; 4]| (0..4).map(|j| imp.w[j] * imp.n.dot(&x[j])).sum::<Real>();

@@ -94,7 +94,7 @@ impl Simulation {
             .iter()
             .filter_map(|c| c.remesh.as_ref().filter(|r| r.mode.is_adaptive()).map(|r| r.every))
             .min();
-        if every.is_some_and(|e| self.state.frame % e == 0) {
+        if every.is_some_and(|e| self.state.frame.is_multiple_of(e)) {
             let s = self.remesh(RemeshMode::Adaptive)?;
             self.ws.remesh_stats.splits += s.splits;
             self.ws.remesh_stats.flips += s.flips;

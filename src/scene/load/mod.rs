@@ -100,7 +100,7 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
         (Some(_), Some(_)) => return Err(ctx.err("fps", "give frame_time or fps, not both")),
     };
     let steps_per_frame = match (spec.steps_per_frame, spec.time_step) {
-        (Some(n), None) if n >= 1 && n <= 100_000 => n as usize,
+        (Some(n), None) if (1..=100_000).contains(&n) => n as usize,
         (Some(n), None) => {
             return Err(ctx.err("steps_per_frame", format!("expected an integer in 1..=100000, got {n}")))
         }
@@ -118,7 +118,7 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
         (Some(_), Some(_)) => return Err(ctx.err("time_step", "give steps_per_frame or time_step, not both")),
     };
     let frames = match (spec.frames, spec.end_time) {
-        (Some(n), None) if n >= 1 && n <= 10_000_000 => n as usize,
+        (Some(n), None) if (1..=10_000_000).contains(&n) => n as usize,
         (Some(n), None) => return Err(ctx.err("frames", format!("expected an integer ≥ 1, got {n}"))),
         (None, Some(t)) => (positive(ctx, "end_time", t)? / frame_time - 1e-9).ceil().max(1.0) as usize,
         (None, None) => return Err(ctx.err("frames", "expected frames or end_time")),
