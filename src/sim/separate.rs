@@ -41,8 +41,8 @@ use crate::math::{Real, Vec3};
 
 use super::Simulation;
 
-/// Largest separation move of a node in one step, in repulsion thicknesses: below one
-/// thickness a move cannot carry a node past cloth it is in contact with.
+/// Largest separation move of a node in one step, in repulsion thicknesses: less than the
+/// thickness, so a node comes within the next step's proximity search of any cloth it nears.
 pub const SEPARATION_STEP: Real = 0.5;
 
 impl Simulation {
