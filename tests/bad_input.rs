@@ -122,6 +122,12 @@ fn cases() -> Vec<Case> {
             "must be",
         ),
         json(
+            "initial_intersections_unknown",
+            rect.replace("\"frames\": 2,", "\"frames\": 2, \"collision\": { \"initial_intersections\": \"ignore\" },"),
+            Loc::Field("collision.initial_intersections"),
+            "\"refuse\"",
+        ),
+        json(
             "truncated_json",
             rect[..rect.len() / 2].to_string(),
             Loc::Line(rect[..rect.len() / 2].lines().count()),

@@ -1,5 +1,6 @@
 //! The collision stages' parameters: repulsion thickness and stiffness, friction, self-collision,
-//! the impact-zone iteration cap and the load-time push-out depth.
+//! the impact-zone iteration cap, the load-time push-out depth and what becomes of cloth that
+//! starts deeper inside an obstacle.
 
 use crate::math::Real;
 
@@ -15,6 +16,17 @@ pub struct CollisionParams {
     pub self_collision: bool,
     pub max_iterations: usize,
     pub push_out_tolerance: Real,
+    pub initial_intersections: InitialIntersections,
+}
+
+/// What becomes of cloth nodes deeper than `push_out_tolerance` inside an obstacle at load
+/// (scene `collision.initial_intersections`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InitialIntersections {
+    /// Moved out over the first steps by the separation stage (`sim::separate`).
+    Resolve,
+    /// An input error, as before issue 18.
+    Refuse,
 }
 
 impl Default for CollisionParams {
@@ -27,6 +39,7 @@ impl Default for CollisionParams {
             self_collision: true,
             max_iterations: 100,
             push_out_tolerance: 15e-3,
+            initial_intersections: InitialIntersections::Resolve,
         }
     }
 }

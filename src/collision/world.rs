@@ -68,6 +68,9 @@ pub struct CollisionWorld {
     broad: BroadPhase,
     /// Per body, its signed distance field as of the last query (`with_sdf`); empty until then.
     sdfs: Vec<Mutex<Option<BodySdf>>>,
+    /// Cloth nodes whose elements take no obstacle contact or impact: nodes inside an obstacle
+    /// while `sim::separate` moves them out (or holds them, inside two that overlap).
+    pub exempt: Vec<bool>,
 }
 
 /// A body's signed distance field and the time of the positions it holds.
@@ -92,6 +95,7 @@ impl CollisionWorld {
             obs_edge_opposite: Vec::new(),
             broad: BroadPhase::default(),
             sdfs: Vec::new(),
+            exempt: Vec::new(),
         };
         w.sdfs = w.bodies.iter().map(|_| Mutex::new(None)).collect();
         w.lay_out();
@@ -226,6 +230,9 @@ impl CollisionWorld {
         let mut broad = std::mem::take(&mut self.broad);
         let this = &*self;
         let narrow = |(kind, nodes): Candidate| {
+            if exempt_against_obstacle(&this.exempt, &nodes, n) {
+                return None;
+            }
             let xs = nodes.map(pos);
             let area = nodes.iter().filter(|&&i| i < n).map(|&i| contact_area[i]).fold(0.0, Real::max);
             let k = k_area * area;
@@ -369,11 +376,15 @@ impl CollisionWorld {
             |i: usize| if i < n { x1[i] } else { self.obs_x1[i - n] },
         );
         let outward = &self.obs_normals;
+        let exempt = &self.exempt;
         let narrow = |(kind, nodes): Candidate| {
+            if exempt_against_obstacle(exempt, &nodes, n) {
+                return None;
+            }
             let (a, b) = (nodes.map(p0), nodes.map(p1));
             let hit =
                 if kind == VF { vertex_face_ccd(&a, &b, CCD_TOLERANCE) } else { edge_edge_ccd(&a, &b, CCD_TOLERANCE) };
-            let imp = hit.map(|imp| outside_obstacle(imp, &nodes, n, &outward))?;
+            let imp = hit.map(|imp| outside_obstacle(imp, &nodes, n, outward))?;
             // Cloth leaving an obstacle it was inside of has nothing to be stopped.
             let obstacle = nodes.iter().any(|&i| i >= n);
             let sep = |x: &[Vec3; 4]| (0..4).map(|j| imp.w[j] * imp.n.dot(&x[j])).sum::<Real>();
@@ -460,6 +471,11 @@ impl CollisionWorld {
             counters.cap_hits += 1;
         }
     }
+}
+
+/// Whether a candidate pairs an obstacle with cloth that has an `exempt` node (`n` cloth nodes).
+fn exempt_against_obstacle(exempt: &[bool], nodes: &[usize; 4], n: usize) -> bool {
+    !exempt.is_empty() && nodes.iter().any(|&i| i >= n) && nodes.iter().any(|&i| i < n && exempt[i])
 }
 
 /// Against an obstacle, the side the cloth must end on is known: outside (obstacles are closed

@@ -76,9 +76,13 @@ pub struct CollisionSpec {
     #[serde(default)]
     pub max_iterations: Option<i64>,
     /// Cloth nodes up to this deep inside an obstacle at load are pushed out (m, default 3 ×
-    /// thickness); deeper is an error.
+    /// thickness); deeper nodes are separated over the first steps (`"resolve"`, default) or
+    /// are an error (`"refuse"`).
     #[serde(default)]
     pub push_out_tolerance: Option<f64>,
+    /// `"resolve"` or `"refuse"`: cloth deeper than `push_out_tolerance` inside an obstacle.
+    #[serde(default)]
+    pub initial_intersections: Option<String>,
 }
 
 fn default_gravity() -> [f64; 3] {

@@ -186,7 +186,8 @@ impl Simulation {
         self.ws.remeshed(state, &self.scene.materials)?;
         self.constraints_remeshed();
         if !self.scene.disabled.separation {
-            self.push_out(None)?;
+            let (_, left) = self.push_out(Real::INFINITY)?;
+            self.state.separating |= left > 0;
         }
         Ok(())
     }

@@ -24,7 +24,7 @@ use super::state::PlasticState;
 use super::SimState;
 
 const MAGIC: &[u8; 8] = b"VCLOTHCK";
-const FORMAT_VERSION: u32 = 7;
+const FORMAT_VERSION: u32 = 8;
 /// File names: `checkpoint_<frame>.bin`.
 const PREFIX: &str = "checkpoint_";
 const SUFFIX: &str = ".bin";
@@ -167,6 +167,7 @@ pub fn encode(run: &RunRecord, st: &SimState, stats: &RunStats) -> Vec<u8> {
     w.u64(st.steps);
     w.f64(st.time);
     w.usize(st.pushed_out);
+    w.u8(st.separating as u8);
     let m = &st.mesh;
     w.usize(m.verts.len());
     for v in &m.verts {
@@ -279,6 +280,7 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
         obj_velocities: r.u8()? != 0,
     };
     let (frame, steps, time, pushed_out) = (r.usize()?, r.u64()?, r.f64()?, r.usize()?);
+    let separating = r.u8()? != 0;
     let mut mesh = Mesh::default();
     let nv = r.count(20)?;
     for _ in 0..nv {
@@ -354,6 +356,7 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
         steps,
         time,
         pushed_out,
+        separating,
         mesh,
         rest_angles,
         plastic,
@@ -448,6 +451,7 @@ mod tests {
             steps: 12,
             time: 0.12,
             pushed_out: 0,
+            separating: true,
             mesh: crate::mesh::rectangle(1.0, 1.0, 2, 2).unwrap(),
             rest_angles: vec![0.0; 16],
             plastic: Some(PlasticState { shapes: vec![Mat2::new(1.0, 2.0, 2.0, 3.0); 8], damage: vec![0.5; 8] }),

@@ -1,7 +1,8 @@
 //! The simulation: the scene (read-only), the state a checkpoint holds (`state`), the workspace
 //! derived from them (`workspace`), the step as a list of named, timed stages (`step`) with its
 //! fault checks (`checks`) and retries (`recover`), the plasticity stage (`plastic`), the
-//! remeshing stage (`adapt`) and its pop filter (`pop`), checkpoints and the run that writes frames (`run`).
+//! remeshing stage (`adapt`) and its pop filter (`pop`), the separation of cloth that starts
+//! inside obstacles (`separate`), checkpoints and the run that writes frames (`run`).
 
 mod adapt;
 pub mod checkpoint;
@@ -15,6 +16,7 @@ pub mod pop;
 pub mod progress;
 pub mod recover;
 mod run;
+mod separate;
 pub mod state;
 mod step;
 pub mod timers;
@@ -28,6 +30,7 @@ pub use state::SimState;
 pub use workspace::Workspace;
 
 use crate::collision::crossings::{find_crossings, Crossings, Soup};
+use crate::collision::params::InitialIntersections;
 use crate::collision::world::CollisionWorld;
 use crate::error::InputError;
 use crate::io::stats::FrameStats;
@@ -64,14 +67,17 @@ pub struct Simulation {
 impl Simulation {
     /// A fresh start: the input mesh refined once where a cloth asks for it (uniform mode: to
     /// its minimum edge; adaptive modes remesh at each frame start), and cloth registered
-    /// slightly inside an obstacle pushed out.
+    /// slightly inside an obstacle pushed out. Cloth deeper inside is left to the separation
+    /// stage (`separate.rs`), or refused (`collision.initial_intersections`).
     pub fn new(scene: Scene) -> Result<Self, SimError> {
         scene.require_camera_for_view().map_err(SimError::Input)?;
         let state = SimState::initial(&scene);
         let mut sim = Simulation::build(scene, state)?;
         sim.remesh(RemeshMode::Uniform)?;
         let tolerance = sim.scene.collision.push_out_tolerance;
-        sim.state.pushed_out = sim.push_out(Some(tolerance))?;
+        let (pushed, deep) = sim.push_out(tolerance)?;
+        sim.state.pushed_out = pushed;
+        sim.state.separating = deep > 0;
         Ok(sim)
     }
 
@@ -106,41 +112,58 @@ impl Simulation {
     }
 
     /// Nodes inside an obstacle are moved out along its surface normal to the repulsion
-    /// thickness: at load for garments registered slightly inside a body (deeper than
-    /// `tolerance` is an error), and after a remesh. Returns how many moved.
-    fn push_out(&mut self, tolerance: Option<Real>) -> Result<usize, SimError> {
-        let Some(world) = &self.ws.collisions else { return Ok(0) };
+    /// thickness: at load for garments registered slightly inside a body, and after a remesh
+    /// (`tolerance` infinite). Nodes deeper than `tolerance`, and nodes inside two obstacles
+    /// (pushed out of one they would land in the other), stay where they are for the separation
+    /// stage, or (deeper than `tolerance`) are an error when the scene refuses initial
+    /// intersections. Returns how many nodes moved and how many were left inside.
+    fn push_out(&mut self, tolerance: Real) -> Result<(usize, usize), SimError> {
+        let Some(world) = &self.ws.collisions else { return Ok((0, 0)) };
         let th = world.params.thickness;
-        let tol = tolerance.unwrap_or(Real::INFINITY);
-        let mut pushed = 0;
-        for b in (0..world.bodies.len()).filter(|&b| world.present(b, self.state.time)) {
+        let refuse = world.params.initial_intersections == InitialIntersections::Refuse;
+        let t = self.state.time;
+        let x = self.state.mesh.positions();
+        let hits: Vec<(usize, Vec<_>)> = (0..world.bodies.len())
+            .filter(|&b| world.present(b, t))
+            .map(|b| (b, world.with_sdf(b, t, |sdf| sdf.query_inside(&x))))
+            .collect();
+        let mut bodies_inside = vec![0usize; x.len()];
+        for (_, h) in &hits {
+            for (i, q) in h.iter().enumerate() {
+                bodies_inside[i] += q.is_some() as usize;
+            }
+        }
+        let (mut pushed, mut left) = (0, 0);
+        for (b, h) in hits {
             let mut too_deep = vec![0usize; self.scene.cloths.len()];
             let mut moves = Vec::new();
-            let inside = world.with_sdf(b, self.state.time, |sdf| sdf.query_inside(&self.state.mesh.positions()));
-            for (i, (node, q)) in self.state.mesh.nodes.iter().zip(inside).enumerate() {
+            for (i, (node, q)) in self.state.mesh.nodes.iter().zip(h).enumerate() {
                 let Some(q) = q else { continue };
-                if -q.distance > tol {
+                if -q.distance > tolerance {
                     too_deep[node.cloth as usize] += 1;
+                } else if bodies_inside[i] > 1 && !refuse {
+                    left += 1;
                 } else {
                     moves.push((i, q.point + q.normal * th));
                 }
             }
-            if let Some(c) = too_deep.iter().position(|&k| k > 0) {
+            if let Some(c) = too_deep.iter().position(|&k| k > 0).filter(|_| refuse) {
                 return Err(SimError::Input(InputError {
                     file: self.scene.file.clone(),
                     location: Some(format!("cloths[{c}]")),
                     msg: format!(
-                        "cloth '{}' has {} nodes inside obstacle '{}' deeper than the push-out tolerance {} m (collision.push_out_tolerance)",
-                        self.scene.cloths[c].name, too_deep[c], self.scene.obstacles[b].name, tol
+                        "cloth '{}' has {} nodes inside obstacle '{}' deeper than the push-out tolerance {} m (collision.push_out_tolerance; collision.initial_intersections is \"refuse\")",
+                        self.scene.cloths[c].name, too_deep[c], self.scene.obstacles[b].name, tolerance
                     ),
                 }));
             }
+            left += too_deep.iter().sum::<usize>();
             pushed += moves.len();
             for (i, p) in moves {
                 self.state.mesh.nodes[i].x = p;
             }
         }
-        Ok(pushed)
+        Ok((pushed, left))
     }
 
     /// Elastic energy (membrane + bending) of the current state.

@@ -26,7 +26,9 @@
 //! - The filter's motion is swept by the collision stage (CCD and impact zones, obstacles
 //!   still), so it creates no crossing; ARCSim moves the nodes without a check.
 //! - It does not run before the first step (no acceleration is known; ARCSim skips its
-//!   initialising remeshes), nor with the physics stage switched off.
+//!   initialising remeshes), nor with the physics stage switched off, nor while the separation
+//!   stage (`separate.rs`) is moving cloth out of obstacles: those nodes take no obstacle
+//!   repulsion, and the filter's would push them out at once.
 
 use std::time::Instant;
 
@@ -93,7 +95,7 @@ impl Simulation {
     /// does not run.
     pub(super) fn pop_filter(&mut self) -> Result<Option<PopStats>, SimError> {
         let disabled = &self.scene.disabled;
-        if disabled.pop_filter || disabled.physics || self.state.steps == 0 {
+        if disabled.pop_filter || disabled.physics || self.state.steps == 0 || self.state.separating {
             return Ok(None);
         }
         let clock = Instant::now();

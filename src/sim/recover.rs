@@ -6,6 +6,7 @@
 use crate::math::Real;
 use crate::solver::SolveError;
 
+use super::timers::Stage;
 use super::{SimError, Simulation};
 
 /// Retries halve the step at most this many times (smallest step h / 256).
@@ -91,8 +92,16 @@ impl FaultStats {
 }
 
 impl Simulation {
-    /// One step of size `h`, with fault handling (see the module doc).
+    /// One step of size `h`, with fault handling (see the module doc), after the separation
+    /// stage while cloth that started inside an obstacle is not out yet (`separate.rs`).
     pub fn step(&mut self, h: Real) -> Result<(), SimError> {
+        self.ws.trapped.clear();
+        if let Some(world) = &mut self.ws.collisions {
+            world.exempt.clear();
+        }
+        if self.state.separating && !self.scene.disabled.separation {
+            self.timed(Stage::Separation, Simulation::separate);
+        }
         let t1 = self.state.time + h;
         self.step_to(h, t1, 0)
     }

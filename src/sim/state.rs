@@ -23,6 +23,9 @@ pub struct SimState {
     pub time: Real,
     /// Cloth nodes pushed out of obstacles at load.
     pub pushed_out: usize,
+    /// Whether the separation stage (`separate.rs`) still runs: cloth started deeper inside an
+    /// obstacle than the push-out tolerance and is not out yet.
+    pub separating: bool,
     /// Material coordinates, node positions, velocities and masses, faces (edges re-derived).
     pub mesh: Mesh,
     /// Rest dihedral angle of each edge of `mesh`.
@@ -70,6 +73,7 @@ impl SimState {
             steps: 0,
             time: scene.start_time(),
             pushed_out: 0,
+            separating: false,
             handle_nodes: scene.handles.iter().map(|h| h.nodes.clone()).collect(),
             // Handles on from the run's start anchor the initial positions then.
             handle_on: scene

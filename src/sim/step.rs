@@ -94,7 +94,7 @@ impl Simulation {
             .iter()
             .filter_map(|c| c.remesh.as_ref().filter(|r| r.mode.is_adaptive()).map(|r| r.every))
             .min();
-        if every.is_some_and(|e| self.state.frame % e == 0) {
+        if every.is_some_and(|e| self.state.frame.is_multiple_of(e)) {
             let s = self.remesh(RemeshMode::Adaptive)?;
             self.ws.remesh_stats.splits += s.splits;
             self.ws.remesh_stats.flips += s.flips;
@@ -162,9 +162,12 @@ impl Simulation {
     }
 
     /// The velocity over the step of length `h` that takes every node an exact handle holds
-    /// onto its target.
+    /// onto its target; zero for the nodes trapped inside two obstacles (`separate.rs`).
     fn pinned_velocities(&self, exact: &[(usize, Vec3)], h: Real) -> Vec<Option<Vec3>> {
         let mut pinned = vec![None; self.state.mesh.nodes.len()];
+        for &n in &self.ws.trapped {
+            pinned[n] = Some(Vec3::zeros());
+        }
         for &(n, target) in exact {
             pinned[n] = Some((target - self.state.mesh.nodes[n].x) / h);
         }

@@ -48,6 +48,8 @@ pub enum Stage {
     Plasticity,
     /// The pop filter after a remesh (`pop.rs`), without its collision sweep (`Collision`).
     PopFilter,
+    /// Moving cloth that started inside obstacles out (`separate.rs`).
+    Separation,
 }
 
 impl Stage {
@@ -73,6 +75,7 @@ impl Stage {
             Stage::StrainLimit => "strain_limit",
             Stage::Plasticity => "plasticity",
             Stage::PopFilter => "pop_filter",
+            Stage::Separation => "separation",
         }
     }
 }

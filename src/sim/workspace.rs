@@ -43,6 +43,9 @@ pub struct Workspace {
     pub faults: FaultStats,
     /// Present when a cloth has long range attachments or strain limits.
     pub constraints: Option<Constraints>,
+    /// Cloth nodes inside two obstacles at the current step, held where they are
+    /// (`separate.rs`); empty unless the separation stage runs.
+    pub trapped: Vec<usize>,
 }
 
 impl Workspace {
@@ -68,6 +71,7 @@ impl Workspace {
             pop: PopStats::default(),
             faults: FaultStats::default(),
             constraints: Constraints::build(scene, state),
+            trapped: Vec::new(),
         })
     }
 

@@ -7,7 +7,7 @@ use super::material::resolve;
 use super::spec::{ClothSpec, CollisionSpec, KeyframeSpec, MotSpec, SceneSpec, TransformSpec};
 use super::{Cloth, Disabled, Scene};
 use crate::camera::Camera;
-use crate::collision::params::CollisionParams;
+use crate::collision::params::{CollisionParams, InitialIntersections};
 use crate::error::InputError;
 use crate::forces::wind::Wind;
 use crate::io::obj::{read_obj, ObjData};
@@ -100,7 +100,7 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
         (Some(_), Some(_)) => return Err(ctx.err("fps", "give frame_time or fps, not both")),
     };
     let steps_per_frame = match (spec.steps_per_frame, spec.time_step) {
-        (Some(n), None) if n >= 1 && n <= 100_000 => n as usize,
+        (Some(n), None) if (1..=100_000).contains(&n) => n as usize,
         (Some(n), None) => {
             return Err(ctx.err("steps_per_frame", format!("expected an integer in 1..=100000, got {n}")))
         }
@@ -118,7 +118,7 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
         (Some(_), Some(_)) => return Err(ctx.err("time_step", "give steps_per_frame or time_step, not both")),
     };
     let frames = match (spec.frames, spec.end_time) {
-        (Some(n), None) if n >= 1 && n <= 10_000_000 => n as usize,
+        (Some(n), None) if (1..=10_000_000).contains(&n) => n as usize,
         (Some(n), None) => return Err(ctx.err("frames", format!("expected an integer ≥ 1, got {n}"))),
         (None, Some(t)) => (positive(ctx, "end_time", t)? / frame_time - 1e-9).ceil().max(1.0) as usize,
         (None, None) => return Err(ctx.err("frames", "expected frames or end_time")),
@@ -262,6 +262,16 @@ fn collision_params(ctx: &Ctx, spec: Option<&CollisionSpec>) -> Res<CollisionPar
     }
     if let Some(t) = c.push_out_tolerance {
         p.push_out_tolerance = non_negative(ctx, "collision.push_out_tolerance", t)?;
+    }
+    if let Some(mode) = &c.initial_intersections {
+        p.initial_intersections = match mode.as_str() {
+            "resolve" => InitialIntersections::Resolve,
+            "refuse" => InitialIntersections::Refuse,
+            other => {
+                let msg = format!("expected \"resolve\" or \"refuse\", got \"{other}\"");
+                return Err(ctx.err("collision.initial_intersections", msg));
+            }
+        };
     }
     Ok(p)
 }
