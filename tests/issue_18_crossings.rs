@@ -4,7 +4,8 @@
 //! and ARCSim conf (`../shared/arcsim`, skipped when absent), each run for a few frames; the
 //! `crossings` command's answers on hand-made frames and bad input; and jittered repeats
 //! (`simulate --jitter-seed`): different seeds give different frames, the same seed the same
-//! bytes.
+//! bytes. The two hard-start stress scenes are the exceptions the geometry forces, each named
+//! below (`OVERLAPPING_OBSTACLES`, `STARTS_INSIDE`).
 
 mod common;
 
@@ -52,8 +53,19 @@ fn count_from_files(dir: &Path) -> (Vec<(usize, usize, usize)>, bool, String) {
 /// Simulates `scene` for `frames` frames with the obstacles exported and returns what is wrong:
 /// a failed run, a frame with crossings in stats.json, a frame whose count from the files
 /// differs, or crossings found by `viewcloth crossings`.
+/// Stress scenes whose cloth starts inside two obstacles that overlap (issue 18, "hard
+/// starts"): no position is outside both, so the cloth held in the overlap crosses both surfaces
+/// for as long as they overlap. Here only their self crossings must be zero; `tests/stress.rs`
+/// asserts that every obstacle crossing of theirs is by a triangle with a node inside both.
+const OVERLAPPING_OBSTACLES: [&str; 1] = ["crush_overlap"];
+/// Stress scenes whose input state lies partly inside an obstacle (the other hard start): frame 0
+/// is the input as given, crossing by construction; every frame after it must be clear.
+const STARTS_INSIDE: [&str; 1] = ["skirt_inside"];
+
 fn problems(scene: &Path, frames: usize, out_root: &Path) -> Vec<String> {
     let name = scene.file_stem().unwrap().to_string_lossy().into_owned();
+    let trapped = OVERLAPPING_OBSTACLES.contains(&name.as_str());
+    let first = usize::from(STARTS_INSIDE.contains(&name.as_str()));
     let dir = out_root.join(&name);
     let clock = std::time::Instant::now();
     let run = viewcloth(&[
@@ -72,15 +84,18 @@ fn problems(scene: &Path, frames: usize, out_root: &Path) -> Vec<String> {
         return bad;
     }
     let stats = read_stats(&dir);
+    // (frame, self, obstacle); the obstacle count left out (0) where the cloth is trapped.
+    let counted = |o: usize| if trapped { 0 } else { o };
     let from_stats: Vec<(usize, usize, usize)> =
-        stats.frames.iter().map(|f| (f.frame, f.crossings_self, f.crossings_obstacle)).collect();
-    for &(f, s, o) in from_stats.iter().filter(|&&(_, s, o)| s + o > 0) {
+        stats.frames.iter().map(|f| (f.frame, f.crossings_self, counted(f.crossings_obstacle))).collect();
+    for &(f, s, o) in from_stats.iter().filter(|&&(f, s, o)| f >= first && s + o > 0) {
         bad.push(format!("{name}: frame {f}: stats.json: crossings_self {s}, crossings_obstacle {o}"));
     }
     // The files hold positions rounded to nanometres: where pairs cross, a grazing one may
     // count differently from the run's own state, so the two counts are compared where the run
     // found none (and must both be zero everywhere).
     let (from_files, ok, stderr) = count_from_files(&dir);
+    let from_files: Vec<(usize, usize, usize)> = from_files.into_iter().map(|(f, s, o)| (f, s, counted(o))).collect();
     let frames_of = |rows: &[(usize, usize, usize)]| rows.iter().map(|r| r.0).collect::<Vec<_>>();
     if frames_of(&from_files) != frames_of(&from_stats) {
         bad.push(format!(
@@ -89,13 +104,13 @@ fn problems(scene: &Path, frames: usize, out_root: &Path) -> Vec<String> {
             frames_of(&from_stats)
         ));
     }
-    for (f, s) in from_files.iter().zip(&from_stats).filter(|(f, s)| f != s) {
+    for (f, s) in from_files.iter().zip(&from_stats).filter(|(f, s)| f.0 >= first && f != s) {
         bad.push(format!(
             "{name}: frame {}: the files give {} / {} crossings (self / obstacle), stats.json {} / {}",
             f.0, f.1, f.2, s.1, s.2
         ));
     }
-    if !ok && bad.is_empty() {
+    if !ok && bad.is_empty() && !trapped && first == 0 {
         bad.push(format!("{name}: viewcloth crossings: {}", stderr.trim()));
     }
     assert_eq!(from_stats.len(), frames + 1, "{name}: frames listed");
