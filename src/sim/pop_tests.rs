@@ -27,6 +27,14 @@ fn hanging() -> Simulation {
     sim
 }
 
+/// `hanging()` with every acceleration zero (as if held still), and its positions.
+fn hanging_still() -> (Simulation, Vec<Vec3>) {
+    let mut sim = hanging();
+    sim.state.mesh.nodes.iter_mut().for_each(|n| n.a = Vec3::zeros());
+    let x0 = sim.state.mesh.positions();
+    (sim, x0)
+}
+
 /// The objective's gradient at the state's positions by central differences, per node, with
 /// every node's load (f_ext − m a₀) as the filter forms it and x₀ = `x0`.
 fn objective_gradient(sim: &Simulation, x0: &[Vec3]) -> Vec<Vec3> {
@@ -65,13 +73,9 @@ fn largest(v: &[Vec3], skip: &[bool]) -> Real {
 
 #[test]
 fn a_state_whose_forces_give_each_node_its_acceleration_does_not_move() {
-    let mut sim = hanging();
-    let x0 = sim.state.mesh.positions();
+    let (mut sim, x0) = hanging_still();
     // a₀ := (F + m g) / m, F = −∇E by central differences: the gradient at x₀ with a₀ = 0 is
     // −F − m g, so the acceleration that makes it vanish is −grad / m.
-    for n in sim.state.mesh.nodes.iter_mut() {
-        n.a = Vec3::zeros();
-    }
     let grad = objective_gradient(&sim, &x0);
     let held = held_nodes(&sim);
     assert!(largest(&grad, &held) > 1e-4, "the hanging sheet is loaded: {}", largest(&grad, &held));
@@ -84,12 +88,8 @@ fn a_state_whose_forces_give_each_node_its_acceleration_does_not_move() {
 
 #[test]
 fn the_filter_reaches_a_stationary_point_of_its_objective() {
-    let mut sim = hanging();
-    let x0 = sim.state.mesh.positions();
     // At rest, as if the sheet had been held still: gravity and the forces unbalanced.
-    for n in sim.state.mesh.nodes.iter_mut() {
-        n.a = Vec3::zeros();
-    }
+    let (mut sim, x0) = hanging_still();
     let held = held_nodes(&sim);
     let before = largest(&objective_gradient(&sim, &x0), &held);
     let stats = sim.pop_filter().unwrap().expect("the filter runs");
