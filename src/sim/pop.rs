@@ -38,6 +38,7 @@ use crate::math::{Real, Vec3};
 use crate::solver::{SolveTiming, StepInput};
 
 use super::checks::Elastic;
+use super::step::inverse_masses;
 use super::timers::Stage;
 use super::{SimError, Simulation};
 
@@ -223,12 +224,7 @@ impl Simulation {
         let clock = Instant::now();
         let Some(world) = &mut self.ws.collisions else { return };
         let mesh = &self.state.mesh;
-        let inv_mass: Vec<Real> = mesh
-            .nodes
-            .iter()
-            .zip(pinned)
-            .map(|(n, p)| if p.is_some() || n.mass <= 0.0 { 0.0 } else { 1.0 / n.mass })
-            .collect();
+        let inv_mass = inverse_masses(&mesh.nodes, pinned);
         let mut x = mesh.positions();
         world.resolve(mesh, x0, &mut x, &inv_mass, &mut self.ws.counters);
         for (node, p) in self.state.mesh.nodes.iter_mut().zip(x) {

@@ -46,6 +46,12 @@ fn friction_contacts<'a>(
     })
 }
 
+/// Per node 1/m, or 0 for a node whose motion is prescribed (`pinned`) or that has no mass:
+/// neither moves in the solve's friction terms nor in a projection.
+pub(super) fn inverse_masses(nodes: &[crate::mesh::Node], pinned: &[Option<Vec3>]) -> Vec<Real> {
+    nodes.iter().zip(pinned).map(|(n, p)| if p.is_some() || n.mass <= 0.0 { 0.0 } else { 1.0 / n.mass }).collect()
+}
+
 /// What an attempt has fixed before its checks: the step, its start and its contacts.
 struct StepData {
     h: Real,
@@ -206,11 +212,7 @@ impl Simulation {
         let nodes = &self.state.mesh.nodes;
         let x0 = self.state.mesh.positions();
         let v0: Vec<Vec3> = nodes.iter().map(|n| n.v).collect();
-        let inv_mass: Vec<Real> = nodes
-            .iter()
-            .zip(pinned)
-            .map(|(n, p)| if p.is_some() || n.mass <= 0.0 { 0.0 } else { 1.0 / n.mass })
-            .collect();
+        let inv_mass = inverse_masses(nodes, pinned);
         let world = self.ws.collisions.as_ref();
         let fixed: &[Vec3] = world.map(|w| w.obs_x1.as_slice()).unwrap_or(&[]);
         let fixed_v = world.map(|w| w.obstacle_velocities(h)).unwrap_or_default();
@@ -320,11 +322,7 @@ impl Simulation {
     ) -> (StepData, Vec<Vec3>) {
         let nodes = &self.state.mesh.nodes;
         let v: Vec<Vec3> = out.v.iter().zip(&pinned).map(|(v, p)| p.unwrap_or(*v)).collect();
-        let inv_mass: Vec<Real> = nodes
-            .iter()
-            .zip(&pinned)
-            .map(|(n, p)| if p.is_some() || n.mass <= 0.0 { 0.0 } else { 1.0 / n.mass })
-            .collect();
+        let inv_mass = inverse_masses(nodes, &pinned);
         let mut held_inv_mass = inv_mass.clone();
         for s in &held.springs {
             if let Spring::Anchor { node, .. } = s {
