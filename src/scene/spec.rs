@@ -210,6 +210,8 @@ pub struct ViewSpec {
     pub hold: Option<f64>,
     #[serde(default)]
     pub two_sided: Option<bool>,
+    #[serde(default)]
+    pub coarsen_time: Option<f64>,
 }
 
 #[derive(Deserialize, Debug, Clone)]

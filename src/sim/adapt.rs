@@ -9,6 +9,7 @@ use crate::remesh::rest_shape::{edge_angles_from_shapes, face_shapes};
 use crate::remesh::{remesh, Finished, RemeshLimits, RemeshStats};
 use crate::scene::RemeshMode;
 use crate::sizing::view::face_views;
+use crate::sizing::view_memory;
 use crate::sizing::{face_metrics, vertex_metrics, FaceView, ObstaclePlane, SizingParams};
 
 use super::state::glue_pairs;
@@ -86,7 +87,16 @@ impl Simulation {
         }
         let clock = Instant::now();
         let dt = self.scene.frame_time * every as Real;
-        let views = face_views(&self.state.mesh, camera, self.state.time, dt, &params);
+        let mut views = face_views(&self.state.mesh, camera, self.state.time, dt, &params);
+        // Smoothed coarsening: μ falls by at most Δt / T_c per remesh (`view_memory`).
+        let drop: Vec<Real> = params
+            .iter()
+            .map(|p| match p {
+                Some((v, _)) if v.coarsen_time > 0.0 => dt / v.coarsen_time,
+                _ => Real::INFINITY,
+            })
+            .collect();
+        view_memory::apply_floor(&self.state.mesh, &mut views, &self.state.view_memory, &drop);
         self.ws.timers.since(Stage::View, clock);
         views
     }
@@ -132,6 +142,14 @@ impl Simulation {
         let (finished, stats) = remesh(&self.state.mesh, vsize, preserved, &groups, &shapes, &damage, &limits)
             .map_err(|e| SimError::Mesh(format!("remeshing failed: {e}")))?;
         let changed = stats.splits + stats.collapses + stats.flips > 0;
+        let memory = match views.is_empty() {
+            true => Vec::new(),
+            false => view_memory::remember(&self.state.mesh, &views),
+        };
+        self.state.view_memory = match changed && !memory.is_empty() {
+            true => view_memory::carry(&memory, &finished.node_map, &finished.mesh),
+            false => memory,
+        };
         if changed {
             self.adopt(finished)?;
         }

@@ -24,7 +24,7 @@ use super::state::PlasticState;
 use super::SimState;
 
 const MAGIC: &[u8; 8] = b"VCLOTHCK";
-const FORMAT_VERSION: u32 = 8;
+const FORMAT_VERSION: u32 = 9;
 /// File names: `checkpoint_<frame>.bin`.
 const PREFIX: &str = "checkpoint_";
 const SUFFIX: &str = ".bin";
@@ -221,6 +221,8 @@ pub fn encode(run: &RunRecord, st: &SimState, stats: &RunStats) -> Vec<u8> {
     }
     w.usize(st.stuck.len());
     st.stuck.iter().flatten().for_each(|&i| w.usize(i));
+    w.usize(st.view_memory.len());
+    st.view_memory.iter().for_each(|&m| w.f64(m));
     // Statistics so far (serialising a RunStats cannot fail: strings, numbers, maps).
     w.bytes(&serde_json::to_vec(stats).unwrap_or_default());
     let sum = fnv1a(&w.0);
@@ -347,6 +349,8 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
     let ns = r.count(32)?;
     let stuck =
         (0..ns).map(|_| Ok([r.usize()?, r.usize()?, r.usize()?, r.usize()?])).collect::<Result<Vec<_>, String>>()?;
+    let nm = r.count(8)?;
+    let view_memory = (0..nm).map(|_| r.f64()).collect::<Result<Vec<_>, String>>()?;
     let stats: RunStats = serde_json::from_slice(r.bytes()?).map_err(|e| format!("statistics: {e}"))?;
     if r.pos != body.len() {
         return Err("trailing bytes".into());
@@ -364,6 +368,7 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
         handle_on,
         extra_pairs,
         stuck,
+        view_memory,
     };
     Ok(Checkpoint { run, state, stats })
 }
@@ -459,6 +464,7 @@ mod tests {
             handle_on: vec![Some(HandleOn { time: 0.5, x: vec![Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.0, -1.0, 0.5)] })],
             extra_pairs: vec![(3, 1)],
             stuck: vec![[0, 1, 2, 9]],
+            view_memory: vec![0.25; 9],
         };
         let run = RunRecord {
             scene_file: Some("/a/b.json".into()),
@@ -481,6 +487,7 @@ mod tests {
         assert_eq!(back.state.handle_on, st.handle_on);
         assert_eq!(back.state.stuck, st.stuck);
         assert_eq!(back.state.plastic, st.plastic);
+        assert_eq!(back.state.view_memory, st.view_memory);
         for cut in [0, 8, 20, bytes.len() / 2, bytes.len() - 1] {
             assert!(decode(&bytes[..cut]).is_err(), "truncated at {cut} accepted");
         }

@@ -47,6 +47,9 @@ pub struct SimState {
     /// Participants of the friction contacts that stuck at the last step, sorted: the next
     /// step's first guess of their mode (`collision::friction`).
     pub stuck: Vec<[usize; 4]>,
+    /// Per node, the largest view factor of its faces at the last view-dependent remesh
+    /// (`sizing::view_memory`, smoothed coarsening); empty before it and in other modes.
+    pub view_memory: Vec<Real>,
 }
 
 /// The plastic state of every face of the mesh (`forces::plasticity`): the rest shape operator
@@ -91,6 +94,7 @@ impl SimState {
             plastic,
             mesh,
             stuck: Vec::new(),
+            view_memory: Vec::new(),
         }
     }
 
@@ -143,6 +147,12 @@ impl SimState {
         // Only looked up (a first guess), but looked up by binary search.
         if !self.stuck.is_sorted() {
             return Err(bad("friction contacts not sorted".into()));
+        }
+        if !self.view_memory.is_empty() && self.view_memory.len() != n {
+            return Err(bad(format!("view memory of {} nodes for {n}", self.view_memory.len())));
+        }
+        if self.view_memory.iter().any(|m| !(0.0..=1.0).contains(m)) {
+            return Err(bad("view memory outside [0, 1]".into()));
         }
         Ok(self)
     }

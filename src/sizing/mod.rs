@@ -6,6 +6,7 @@
 
 pub mod tensor_max;
 pub mod view;
+pub mod view_memory;
 
 use rayon::prelude::*;
 

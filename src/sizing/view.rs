@@ -40,6 +40,9 @@ pub struct ViewParams {
     /// Both sides of the cloth can be seen: orientation uses |cos θ|. Koh et al. coarsen the
     /// back side (a garment's inside); a single-layer sheet is visible from both sides.
     pub two_sided: bool,
+    /// Seconds over which a face's view factor may fall from 1 to 0 (smoothed coarsening,
+    /// `view_memory`); 0 lets it fall at once. Defaults to `window`.
+    pub coarsen_time: Real,
 }
 
 impl Default for ViewParams {
@@ -53,6 +56,7 @@ impl Default for ViewParams {
             window: 0.4,
             hold: 0.2,
             two_sided: true,
+            coarsen_time: 0.4,
         }
     }
 }

@@ -76,6 +76,8 @@ fn view_params(ctx: &Ctx, path: &str, v: Option<&ViewSpec>) -> Res<ViewParams> {
     check("k_dist", v.k_dist, 0.0, 1.0, false, &mut p.k_dist)?;
     check("window", v.window, 0.0, 1e3, false, &mut p.window)?;
     check("hold", v.hold, 0.0, 1e3, false, &mut p.hold)?;
+    p.coarsen_time = p.window;
+    check("coarsen_time", v.coarsen_time, 0.0, 1e3, false, &mut p.coarsen_time)?;
     if let Some(b) = v.two_sided {
         p.two_sided = b;
     }
