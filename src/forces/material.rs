@@ -8,7 +8,7 @@ use super::data_driven::{measured_bending, measured_membrane, MeasuredMaterial};
 use super::membrane::{membrane, MembraneRest, MembraneStiffness};
 use super::plasticity::Plasticity;
 use super::{Hinge, Projection};
-use crate::math::{Mat12, Mat9, Real, Vec12, Vec3, Vec9};
+use crate::math::{Mat12, Mat2, Mat9, Real, Vec12, Vec3, Vec9};
 
 /// A fabric, in SI units.
 #[derive(Clone, Debug, PartialEq)]
@@ -30,6 +30,14 @@ pub struct Material {
 impl Material {
     /// The membrane kernel of this fabric for one face, weakened by its damage.
     pub fn stretch(&self, x: &[Vec3; 3], rest: &MembraneRest, proj: Projection) -> (Real, Vec9, Mat9) {
+        let slackened;
+        let rest = match rest.slack == Mat2::identity() {
+            true => rest,
+            false => {
+                slackened = rest.slackened();
+                &slackened
+            }
+        };
         let out = match &self.measured {
             Some(m) => measured_membrane(x, rest, &m.stretching, proj),
             None => membrane(x, rest, &self.membrane, proj),

@@ -18,6 +18,9 @@ pub struct MembraneRest {
     pub area: Real,
     /// Stiffness factor 1/(1 + w·d) of plastic damage (`plasticity`); 1 when undamaged.
     pub weakened: Real,
+    /// L⁻¹ of the rest shape's slack under unresolved buckling (`buckling`): the membrane sees
+    /// F L⁻¹. The identity but on coarsened, compressed faces in view mode.
+    pub slack: Mat2,
 }
 
 impl MembraneRest {
@@ -25,7 +28,13 @@ impl MembraneRest {
         let dm = Mat2::from_columns(&[u[1] - u[0], u[2] - u[0]]);
         let area = 0.5 * dm.determinant();
         let dm_inv = dm.try_inverse()?;
-        (area > 0.0).then_some(MembraneRest { dm_inv, area, weakened: 1.0 })
+        (area > 0.0).then_some(MembraneRest { dm_inv, area, weakened: 1.0, slack: Mat2::identity() })
+    }
+
+    /// The rest data the membrane kernels see: D_m⁻¹ L⁻¹, so that F becomes F L⁻¹ (`buckling`).
+    #[inline]
+    pub fn slackened(&self) -> MembraneRest {
+        MembraneRest { dm_inv: self.dm_inv * self.slack, slack: Mat2::identity(), ..*self }
     }
 
     /// The shape-function gradients b₀, b₁, b₂ (F = Σ xᵢ bᵢᵀ).

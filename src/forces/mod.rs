@@ -3,6 +3,7 @@
 //! (`material::Material`) picks the membrane and bending kernels of its faces and hinges.
 
 pub mod bending;
+pub mod buckling;
 pub mod data_driven;
 pub mod handle;
 pub mod material;
@@ -22,6 +23,7 @@ pub enum Projection {
 use crate::math::Real;
 use crate::mesh::Mesh;
 use bending::{dihedral_angle, BendingRest};
+use material::Material;
 use membrane::MembraneRest;
 
 /// A bending hinge: nodes `[x0, x1, x2, x3]` (edge x0–x1), its edge, material and rest data.
@@ -88,6 +90,24 @@ impl RestState {
         for h in &mut self.hinges {
             h.rest.theta0 = rest_angles[h.edge];
         }
+    }
+
+    /// The rest shapes' slack of buckling compensation (`buckling`) from the current positions:
+    /// face f keeps `kappa[f]` of its compressive stress (1: no slack). `kappa` empty: none.
+    pub fn set_slack(&mut self, mesh: &Mesh, kappa: &[Real], materials: &[Material]) {
+        use rayon::prelude::*;
+        if kappa.len() != self.membrane.len() {
+            self.membrane.iter_mut().for_each(|m| m.slack = crate::math::Mat2::identity());
+            return;
+        }
+        self.membrane.par_iter_mut().enumerate().for_each(|(f, m)| {
+            m.slack = crate::math::Mat2::identity();
+            if kappa[f] < 1.0 {
+                let x = mesh.face_nodes(f).map(|n| mesh.nodes[n].x);
+                let mat = &materials[mesh.faces[f].material as usize];
+                m.slack = buckling::slack(m, kappa[f], |r| mat.stretch(&x, r, Projection::Exact).0);
+            }
+        });
     }
 
     /// The stiffness factors of plastic damage (`plasticity`): a face's from its own damage

@@ -212,6 +212,8 @@ pub struct ViewSpec {
     pub two_sided: Option<bool>,
     #[serde(default)]
     pub coarsen_time: Option<f64>,
+    #[serde(default)]
+    pub buckling_compensation: Option<bool>,
 }
 
 #[derive(Deserialize, Debug, Clone)]

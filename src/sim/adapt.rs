@@ -4,6 +4,7 @@
 
 use std::time::Instant;
 
+use crate::forces::buckling::compensation;
 use crate::math::{Mat2, Real};
 use crate::remesh::rest_shape::{edge_angles_from_shapes, face_shapes};
 use crate::remesh::{remesh, Finished, RemeshLimits, RemeshStats};
@@ -154,6 +155,15 @@ impl Simulation {
             self.adopt(finished)?;
         }
         self.ws.timers.since(Stage::Remesh, clock);
+        if !views.is_empty() {
+            let clock = Instant::now();
+            let buckle = self.buckling_factors(&params);
+            if !buckle.is_empty() || !self.state.buckle.is_empty() {
+                self.state.buckle = buckle;
+                self.ws.rest.set_slack(&self.state.mesh, &self.state.buckle, &self.scene.materials);
+                self.ws.timers.since(Stage::Buckling, clock);
+            }
+        }
         if changed && mode.is_adaptive() {
             if let Some(pop) = self.pop_filter()? {
                 let tally = &mut self.ws.pop;
@@ -162,6 +172,41 @@ impl Simulation {
             }
         }
         Ok(stats)
+    }
+
+    /// Per face, κ of buckling compensation (`forces::buckling`): from the longest edge r of the
+    /// face in the view-independent sizing (every criterion, no view factor, the plain minimum
+    /// edge), the remesher's edge metric; 1 on cloths without it. Empty when no cloth has it.
+    fn buckling_factors(&self, params: &[Option<SizingParams>]) -> Vec<Real> {
+        let mut on = vec![false; self.scene.materials.len()];
+        for c in &self.scene.cloths {
+            if let Some(r) = &c.remesh {
+                on[c.material] = r.mode == RemeshMode::View && r.view.buckling_compensation;
+            }
+        }
+        if !on.contains(&true) {
+            return Vec::new();
+        }
+        let mesh = &self.state.mesh;
+        let plastic = self.plastic_shapes();
+        let face = face_metrics(mesh, params, &self.obstacle_planes(params), &[], &plastic);
+        let vsize = vertex_metrics(mesh, &face);
+        (0..mesh.faces.len())
+            .map(|f| {
+                if !on[mesh.faces[f].material as usize] {
+                    return 1.0;
+                }
+                let (u, v) = (mesh.face_uv(f), mesh.faces[f].v.map(|v| v.idx()));
+                let r2 = (0..3)
+                    .map(|k| {
+                        let (a, b) = (k, (k + 1) % 3);
+                        let du = u[b] - u[a];
+                        0.5 * (du.dot(&(vsize[v[a]] * du)) + du.dot(&(vsize[v[b]] * du)))
+                    })
+                    .fold(0.0, Real::max);
+                compensation(r2.sqrt())
+            })
+            .collect()
     }
 
     /// Per face, the plastic rest shape of a face whose material yields (Narain et al. 2013

@@ -223,6 +223,8 @@ pub fn encode(run: &RunRecord, st: &SimState, stats: &RunStats) -> Vec<u8> {
     st.stuck.iter().flatten().for_each(|&i| w.usize(i));
     w.usize(st.view_memory.len());
     st.view_memory.iter().for_each(|&m| w.f64(m));
+    w.usize(st.buckle.len());
+    st.buckle.iter().for_each(|&k| w.f64(k));
     // Statistics so far (serialising a RunStats cannot fail: strings, numbers, maps).
     w.bytes(&serde_json::to_vec(stats).unwrap_or_default());
     let sum = fnv1a(&w.0);
@@ -351,6 +353,8 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
         (0..ns).map(|_| Ok([r.usize()?, r.usize()?, r.usize()?, r.usize()?])).collect::<Result<Vec<_>, String>>()?;
     let nm = r.count(8)?;
     let view_memory = (0..nm).map(|_| r.f64()).collect::<Result<Vec<_>, String>>()?;
+    let nb = r.count(8)?;
+    let buckle = (0..nb).map(|_| r.f64()).collect::<Result<Vec<_>, String>>()?;
     let stats: RunStats = serde_json::from_slice(r.bytes()?).map_err(|e| format!("statistics: {e}"))?;
     if r.pos != body.len() {
         return Err("trailing bytes".into());
@@ -369,6 +373,7 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
         extra_pairs,
         stuck,
         view_memory,
+        buckle,
     };
     Ok(Checkpoint { run, state, stats })
 }
@@ -465,6 +470,7 @@ mod tests {
             extra_pairs: vec![(3, 1)],
             stuck: vec![[0, 1, 2, 9]],
             view_memory: vec![0.25; 9],
+            buckle: vec![0.5; 8],
         };
         let run = RunRecord {
             scene_file: Some("/a/b.json".into()),
@@ -488,6 +494,7 @@ mod tests {
         assert_eq!(back.state.stuck, st.stuck);
         assert_eq!(back.state.plastic, st.plastic);
         assert_eq!(back.state.view_memory, st.view_memory);
+        assert_eq!(back.state.buckle, st.buckle);
         for cut in [0, 8, 20, bytes.len() / 2, bytes.len() - 1] {
             assert!(decode(&bytes[..cut]).is_err(), "truncated at {cut} accepted");
         }

@@ -50,6 +50,9 @@ pub struct SimState {
     /// Per node, the largest view factor of its faces at the last view-dependent remesh
     /// (`sizing::view_memory`, smoothed coarsening); empty before it and in other modes.
     pub view_memory: Vec<Real>,
+    /// Per face, the share κ of its compressive stress a face keeps under buckling
+    /// compensation (`forces::buckling`), set at each view-dependent remesh; empty when off.
+    pub buckle: Vec<Real>,
 }
 
 /// The plastic state of every face of the mesh (`forces::plasticity`): the rest shape operator
@@ -95,6 +98,7 @@ impl SimState {
             mesh,
             stuck: Vec::new(),
             view_memory: Vec::new(),
+            buckle: Vec::new(),
         }
     }
 
@@ -150,6 +154,16 @@ impl SimState {
         }
         if !self.view_memory.is_empty() && self.view_memory.len() != n {
             return Err(bad(format!("view memory of {} nodes for {n}", self.view_memory.len())));
+        }
+        if !self.buckle.is_empty() && self.buckle.len() != self.mesh.faces.len() {
+            return Err(bad(format!(
+                "buckling compensation of {} faces for {}",
+                self.buckle.len(),
+                self.mesh.faces.len()
+            )));
+        }
+        if self.buckle.iter().any(|k| !(0.0..=1.0).contains(k)) {
+            return Err(bad("buckling compensation outside [0, 1]".into()));
         }
         if self.view_memory.iter().any(|m| !(0.0..=1.0).contains(m)) {
             return Err(bad("view memory outside [0, 1]".into()));

@@ -164,6 +164,9 @@ impl Simulation {
         if self.state.plastic.is_some() {
             self.timed(Stage::Plasticity, Simulation::plastic_update);
         }
+        if !self.state.buckle.is_empty() {
+            self.timed(Stage::Buckling, |s| s.ws.rest.set_slack(&s.state.mesh, &s.state.buckle, &s.scene.materials));
+        }
         Ok(())
     }
 

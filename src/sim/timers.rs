@@ -50,6 +50,9 @@ pub enum Stage {
     PopFilter,
     /// Moving cloth that started inside obstacles out (`separate.rs`).
     Separation,
+    /// Buckling compensation: the coarsened faces' κ at a view-dependent remesh and their rest
+    /// shapes' slack after each step (`forces::buckling`).
+    Buckling,
 }
 
 impl Stage {
@@ -76,6 +79,7 @@ impl Stage {
             Stage::Plasticity => "plasticity",
             Stage::PopFilter => "pop_filter",
             Stage::Separation => "separation",
+            Stage::Buckling => "buckling",
         }
     }
 }

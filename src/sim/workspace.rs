@@ -153,6 +153,9 @@ fn rest_state(state: &SimState, materials: &[Material]) -> Result<RestState, usi
             rest.weaken(&state.mesh, &plastic.damage, &weakening);
         }
     }
+    if !state.buckle.is_empty() {
+        rest.set_slack(&state.mesh, &state.buckle, materials);
+    }
     Ok(rest)
 }
 

@@ -43,6 +43,8 @@ pub struct ViewParams {
     /// Seconds over which a face's view factor may fall from 1 to 0 (smoothed coarsening,
     /// `view_memory`); 0 lets it fall at once. Defaults to `window`.
     pub coarsen_time: Real,
+    /// Coarsened faces keep only part of their compressive stress (`forces::buckling`).
+    pub buckling_compensation: bool,
 }
 
 impl Default for ViewParams {
@@ -57,6 +59,7 @@ impl Default for ViewParams {
             hold: 0.2,
             two_sided: true,
             coarsen_time: 0.4,
+            buckling_compensation: false,
         }
     }
 }

@@ -81,5 +81,8 @@ fn view_params(ctx: &Ctx, path: &str, v: Option<&ViewSpec>) -> Res<ViewParams> {
     if let Some(b) = v.two_sided {
         p.two_sided = b;
     }
+    if let Some(b) = v.buckling_compensation {
+        p.buckling_compensation = b;
+    }
     Ok(p)
 }
