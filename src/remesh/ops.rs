@@ -49,13 +49,34 @@ impl Op {
     }
 }
 
-/// Splits the faces on edge (s → t) of `face` at new vert `p`: (s, p, k) and (p, t, k).
-fn split_face(w: &Work, f: usize, a: usize, b: usize, p: usize, op: &mut Op) {
+/// Material-space aspect below which an operation may not leave a face thinner than the faces
+/// it replaces. Splitting a short edge of a thin face makes it thinner, and repeated along a
+/// boundary or seam whose own edge is not split (its ends' metric is coarser than the interior
+/// vert's) this drove faces to collinear corners: a view-dependent run of the dancer stopped
+/// with "remeshing left face N degenerate" (aspect 1e-2 → 1e-6 → 0 over one remesh).
+pub const SLIVER: Real = 1e-2;
+
+/// Whether replacing faces of least aspect `before` by `after` makes a sliver (`SLIVER`).
+fn makes_sliver(before: Real, after: impl IntoIterator<Item = [Vec2; 3]>) -> bool {
+    after.into_iter().any(|u| {
+        let q = aspect(u);
+        q < SLIVER && q < before
+    })
+}
+
+/// Splits the faces on edge (s → t) of `face` at new vert `p` (material coordinate `up`):
+/// (s, p, k) and (p, t, k); false, adding nothing, when that would make a sliver.
+fn split_face(w: &Work, f: usize, a: usize, b: usize, (p, up): (usize, Vec2), op: &mut Op) -> bool {
     let (s, t) = if w.directed(f, a, b).is_some() { (a, b) } else { (b, a) };
     let k = w.opposite(f, a, b);
+    let before = aspect(w.faces[f].map(|v| w.u[v]));
+    if makes_sliver(before, [[w.u[s], up, w.u[k]], [up, w.u[t], w.u[k]]]) {
+        return false;
+    }
     op.remove_faces.push(f);
     op.add_faces.push(([s, p, k], w.fdata[f]));
     op.add_faces.push(([p, t, k], w.fdata[f]));
+    true
 }
 
 /// Split of material edge a–b at its midpoint (both sides of a seam with one new node). The
@@ -77,17 +98,21 @@ pub fn split(w: &Work, a: usize, b: usize) -> Option<Op> {
         cloth: w.cloth[na],
         group,
     });
-    let p = w.u.len();
-    op.new_verts.push((0.5 * (w.u[a] + w.u[b]), node, 0.5 * (w.vsize[a] + w.vsize[b])));
+    let (p, up) = (w.u.len(), 0.5 * (w.u[a] + w.u[b]));
+    op.new_verts.push((up, node, 0.5 * (w.vsize[a] + w.vsize[b])));
     for &f in &faces {
-        split_face(w, f, a, b, p, &mut op);
+        if !split_face(w, f, a, b, (p, up), &mut op) {
+            return None;
+        }
     }
     if faces.len() == 1 {
         if let Some((c, d)) = w.seam_partner(a, b) {
-            let q = p + 1;
-            op.new_verts.push((0.5 * (w.u[c] + w.u[d]), node, 0.5 * (w.vsize[c] + w.vsize[d])));
+            let (q, uq) = (p + 1, 0.5 * (w.u[c] + w.u[d]));
+            op.new_verts.push((uq, node, 0.5 * (w.vsize[c] + w.vsize[d])));
             for f in w.edge_faces(c, d) {
-                split_face(w, f, c, d, q, &mut op);
+                if !split_face(w, f, c, d, (q, uq), &mut op) {
+                    return None;
+                }
             }
         }
     }
@@ -109,6 +134,10 @@ pub fn flip(w: &Work, a: usize, b: usize) -> Option<Op> {
     let (t0, t1) = ([c, a, d], [d, b, c]);
     let floor = 1e-12 * (w.area(&w.faces[f0]) + w.area(&w.faces[f1]));
     if w.area(&t0) <= floor || w.area(&t1) <= floor {
+        return None;
+    }
+    let before = aspect(w.faces[f0].map(|v| w.u[v])).min(aspect(w.faces[f1].map(|v| w.u[v])));
+    if makes_sliver(before, [t0.map(|v| w.u[v]), t1.map(|v| w.u[v])]) {
         return None;
     }
     // The pair's rest shape and damage, area-weighted, go to both new faces (`rest_shape`).
