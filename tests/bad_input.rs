@@ -97,6 +97,66 @@ fn cases() -> Vec<Case> {
     };
     let rect = rect_scene();
     vec![
+        json(
+            "instance_scene_missing",
+            rect.replace("\"frames\": 2,", "\"frames\": 2, \"instances\": [{ \"scene\": \"nope.json\" }],"),
+            Loc::Field("instances[0].scene"),
+            "nope.json",
+        ),
+        json(
+            "instance_name_not_a_file_name",
+            rect.replace("\"frames\": 2,", "\"frames\": 2, \"instances\": [{ \"name\": \"a b\", \"scene\": \"scene.json\" }],"),
+            Loc::Field("instances[0].name"),
+            "letters, digits",
+        ),
+        json(
+            "instance_scale_negative",
+            rect.replace(
+                "\"frames\": 2,",
+                "\"frames\": 2, \"instances\": [{ \"scene\": \"scene.json\", \"transform\": { \"scale\": -1 } }],",
+            ),
+            Loc::Field("instances[0].transform.scale"),
+            "positive",
+        ),
+        json(
+            "instances_nest",
+            rect.replace("\"frames\": 2,", "\"frames\": 2, \"instances\": [{ \"scene\": \"scene.json\" }],"),
+            Loc::Field("instances[0].scene"),
+            "do not nest",
+        ),
+        Case {
+            name: "instances_named_alike",
+            files: vec![
+                (
+                    "scene.json",
+                    rect.replace(
+                        "\"frames\": 2,",
+                        "\"frames\": 2, \"instances\": [{ \"name\": \"a\", \"scene\": \"inner.json\" }, { \"name\": \"a\", \"scene\": \"inner.json\", \"time_offset\": -0.5 }],",
+                    ),
+                ),
+                ("inner.json", rect.clone()),
+            ],
+            scene: "scene.json",
+            args: &[],
+            file: "scene.json",
+            loc: Loc::Field("instances[1].name"),
+            mentions: "apart",
+        },
+        Case {
+            name: "instanced_scene_bad_field",
+            files: vec![
+                (
+                    "scene.json",
+                    rect.replace("\"frames\": 2,", "\"frames\": 2, \"instances\": [{ \"scene\": \"inner.json\" }],"),
+                ),
+                ("inner.json", rect.replace("[2, 2]", "[0, 2]")),
+            ],
+            scene: "scene.json",
+            args: &[],
+            file: "inner.json",
+            loc: Loc::Field("cloths[0].rectangle.resolution"),
+            mentions: "1..=4096",
+        },
         Case {
             name: "missing_scene_file",
             files: vec![],

@@ -143,11 +143,11 @@ pub(super) fn read_instances(ctx: &Ctx, specs: &[InstanceSpec]) -> Res<Vec<Insta
             return Err(ctx.err(format!("{path}.scene"), msg));
         }
         if !spec.instances.is_empty() {
-            let msg = format!("{} has instances of its own; instances do not nest", file.display());
+            let msg = format!("\"{}\" has instances of its own; instances do not nest", is.scene);
             return Err(ctx.err(format!("{path}.scene"), msg));
         }
         if spec.cloths.is_empty() && spec.obstacles.is_empty() {
-            return Err(ctx.err(format!("{path}.scene"), format!("{} has no cloth and no obstacle", file.display())));
+            return Err(ctx.err(format!("{path}.scene"), format!("\"{}\" has no cloth and no obstacle", is.scene)));
         }
         out.push(Instance { placement, suffix, file, spec });
     }
