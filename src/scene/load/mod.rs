@@ -15,9 +15,11 @@ use crate::math::motion::{KeyVelocity, Keyframe, Motion, Transform};
 use crate::math::{cross2, Vec2, Vec3};
 use crate::mesh::{rectangle, Face, Mesh, MeshError, Node, NodeId, Vert, VertId};
 
-/// The built-in default shot (`viewcloth simulate` with no scene).
-pub const DEFAULT_SCENE: &str = include_str!("../../../scenes/hanging_sheet.json");
-pub const DEFAULT_SCENE_NAME: &str = "hanging_sheet";
+/// The built-in default shot (`viewcloth simulate` with no scene): `scenes/sheet_drape.json`,
+/// seen by `cameras/sheet_drape.json` (built in too, so the shot needs no file at run time).
+pub const DEFAULT_SCENE: &str = include_str!("../../../scenes/sheet_drape.json");
+pub const DEFAULT_SCENE_NAME: &str = "sheet_drape";
+pub const DEFAULT_CAMERA: &str = include_str!("../../../cameras/sheet_drape.json");
 
 mod constraints;
 mod frame_pattern;
