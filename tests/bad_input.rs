@@ -473,6 +473,18 @@ fn check_accepts_every_shipped_scene() {
         .collect();
     scenes.sort();
     assert!(scenes.len() >= 3, "expected the shipped scenes in {dir:?}");
+    // The film shots built on ARCSim's data (dress_dance, crowd_5) read it from ../shared/arcsim
+    // beside the repository; without it they are left out, saying so.
+    let arcsim = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/arcsim");
+    if !arcsim.join("meshes").is_dir() {
+        let needs = |p: &PathBuf| {
+            let text = std::fs::read_to_string(p).unwrap();
+            text.contains("shared/arcsim/") || text.contains("\"dress_dance.json\"")
+        };
+        let (skipped, kept): (Vec<PathBuf>, Vec<PathBuf>) = scenes.into_iter().partition(needs);
+        eprintln!("SKIP checking {skipped:?}: ARCSim data not found at {}", arcsim.display());
+        scenes = kept;
+    }
     let mut args = vec!["check"];
     args.extend(scenes.iter().map(|p| p.to_str().unwrap()));
     let out = viewcloth(&args);
