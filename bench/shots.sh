@@ -15,7 +15,7 @@ set -euo pipefail
 BIN=${1:?usage: bench/shots.sh BIN OUT_ROOT}
 OUT=${2:?usage: bench/shots.sh BIN OUT_ROOT}
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
-SHOTS=${SHOTS:-"dress_dance skirt_walk crowd_5 flag_closeup"}
+SHOTS=${SHOTS:-"dress_dance skirt_walk crowd_5 flag_closeup sheet_drape"}
 THREADS=${THREADS:-1}
 mkdir -p "$OUT"
 table=$OUT/shots.md

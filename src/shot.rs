@@ -7,7 +7,9 @@ use std::path::{Path, PathBuf};
 
 use crate::camera::Camera;
 use crate::error::InputError;
+use crate::render::{render_run, Colouring, RenderError, RenderOptions, RunFiles};
 use crate::scene::{self, RemeshMode, Scene};
+use crate::sim::progress::ProgressMode;
 
 /// What the user asked for.
 #[derive(Clone, Debug, Default)]
@@ -87,8 +89,7 @@ pub fn resolve(req: &ShotRequest) -> Result<Shot, ShotError> {
         None => {
             let name = scene::DEFAULT_SCENE_NAME;
             let file = PathBuf::from(format!("<built-in {name}>"));
-            let scene = scene::load_str(scene::DEFAULT_SCENE, &file, Path::new("."), name)
-                .map_err(|error| ShotError { field: ShotField::Scene, error })?;
+            let scene = default_scene(&file).map_err(|error| ShotError { field: ShotField::Scene, error })?;
             (scene, name.to_string(), Vec::new(), None)
         }
     };
@@ -110,4 +111,50 @@ pub fn resolve(req: &ShotRequest) -> Result<Shot, ShotError> {
     }
     scene.require_camera_for_view().map_err(|error| ShotError { field: ShotField::Mode, error })?;
     Ok(Shot { scene, stem, scene_file, camera_file, mode, warnings })
+}
+
+/// The built-in shot with its built-in camera: the scene file's `camera` names
+/// `cameras/sheet_drape.json` relative to `scenes/`, which need not exist where the binary runs.
+fn default_scene(file: &Path) -> Result<Scene, InputError> {
+    let name = scene::DEFAULT_SCENE_NAME;
+    let mut value: serde_json::Value = serde_json::from_str(scene::DEFAULT_SCENE).map_err(|e| InputError {
+        file: file.to_path_buf(),
+        location: None,
+        msg: e.to_string(),
+    })?;
+    if let Some(fields) = value.as_object_mut() {
+        fields.remove("camera");
+    }
+    let mut scene = scene::load_value(value, file, Path::new("."), name)?;
+    let camera_file = PathBuf::from(format!("<built-in {name} camera>"));
+    scene.camera = Some(Camera::from_json(scene::DEFAULT_CAMERA, &camera_file)?);
+    Ok(scene)
+}
+
+/// Images of the built-in shot's preview: this many frames, evenly spaced, first and last
+/// included.
+pub const PREVIEW_FRAMES: usize = 4;
+
+/// Renders the preview of a finished run of the built-in shot: `PREVIEW_FRAMES` frames evenly
+/// spaced from `first` to `last` (both included), seen from its camera, as `dir/view_NNNN.png`
+/// (480 × 270); returns the image paths.
+pub fn write_preview(dir: &Path, camera: &Camera, first: usize, last: usize) -> Result<Vec<PathBuf>, RenderError> {
+    let mut picks: Vec<usize> =
+        (0..PREVIEW_FRAMES).map(|k| first + (last - first) * k / (PREVIEW_FRAMES - 1)).collect();
+    picks.dedup();
+    let run = RunFiles::scan(dir, first, last)?;
+    let mut images = Vec::with_capacity(picks.len());
+    for f in picks {
+        let opts = RenderOptions {
+            width: 480,
+            height: 270,
+            frames: Some((f, f)),
+            every: 1,
+            colouring: Colouring::Shade,
+            progress: ProgressMode::None,
+        };
+        render_run(dir, camera, &opts)?;
+        images.push(run.image_path(f));
+    }
+    Ok(images)
 }

@@ -130,7 +130,11 @@ const FRAMES: usize = 8;
 
 #[test]
 fn no_crossings_in_any_shipped_scene() {
-    let scenes: Vec<(PathBuf, usize)> = json_files(&crate_path("scenes")).into_iter().map(|s| (s, FRAMES)).collect();
+    // crowd_5 is five copies of dress_dance (which runs the full count): its first frame, where
+    // the five dresses sew onto their bodies, within the suite's budget (8 frames took 176 s).
+    let frames = |s: &Path| if s.file_stem().is_some_and(|n| n == "crowd_5") { 1 } else { FRAMES };
+    let scenes: Vec<(PathBuf, usize)> =
+        json_files(&crate_path("scenes")).into_iter().map(|s| (s.clone(), frames(&s))).collect();
     assert!(scenes.len() >= 8, "{scenes:?}");
     check_all(&scenes, "shipped");
 }

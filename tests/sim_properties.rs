@@ -55,7 +55,8 @@ fn assert_handles_on_target(sim: &Simulation, t0: Real) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// (a) The default shot comes to rest, with its handles exactly in place.
+// (a) The hanging sheet (the default shot until issue 19) comes to rest, with its handles
+// exactly in place.
 
 #[test]
 fn hanging_sheet_comes_to_rest_with_handles_in_place() {

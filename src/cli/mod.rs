@@ -157,7 +157,8 @@ pub fn simulate(args: SimulateArgs) -> Result<(), CliError> {
         out_dir: out_dir.clone(),
         frames: frames.map(|f| f as usize),
         quiet,
-        export_obstacles,
+        // The built-in shot exports its obstacles, for its preview.
+        export_obstacles: export_obstacles || scene.is_none(),
         format,
         obj_velocities,
         jitter,
@@ -172,10 +173,27 @@ pub fn simulate(args: SimulateArgs) -> Result<(), CliError> {
     claim_output(&out_dir, &shot.scene.name, shot.scene_file.as_deref(), force)?;
     install_interrupt()?;
     let progress = Progress::new(ProgressMode::choose(progress.as_deref(), quiet));
+    let camera = shot.scene.camera.clone();
     let stats = run_shot(shot.scene, &opts, Some(&ck), &progress)?;
     if !quiet {
         let frames = stats.frames.len().saturating_sub(1);
         println!("{}: {frames} frames in {:.2} s → {}", stats.scene, stats.total_wall_s, out_dir.display());
+    }
+    // The built-in shot ends with a preview from its camera (OBJ frames only: USD is not read back).
+    if let (None, Some(camera), true) = (&scene, camera, format != OutputFormat::Usd) {
+        let numbers = || stats.frames.iter().map(|f| f.frame);
+        let (first, last) = (numbers().min().unwrap_or(0), numbers().max().unwrap_or(0));
+        let images = shot::write_preview(&out_dir, &camera, first, last).map_err(|e| CliError::Run(e.to_string()))?;
+        if !quiet {
+            let names: Vec<String> =
+                images.iter().filter_map(|p| p.file_name()).map(|n| n.to_string_lossy().into()).collect();
+            println!(
+                "preview ({} frames from the shot camera): {} in {}",
+                images.len(),
+                names.join(", "),
+                out_dir.display()
+            );
+        }
     }
     Ok(())
 }

@@ -16,7 +16,7 @@ pub mod spec;
 
 pub use arcsim::{load_path, Loaded};
 pub use handle::{Circle, FollowObstacle, Handle, HandleKind};
-pub use load::{check_file, load_file, load_str, load_value, DEFAULT_SCENE, DEFAULT_SCENE_NAME};
+pub use load::{check_file, load_file, load_str, load_value, DEFAULT_CAMERA, DEFAULT_SCENE, DEFAULT_SCENE_NAME};
 pub use measured::read_measured;
 
 use std::path::PathBuf;

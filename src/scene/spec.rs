@@ -39,9 +39,15 @@ pub struct SceneSpec {
     pub gravity: [f64; 3],
     #[serde(default)]
     pub wind: Option<WindSpec>,
+    /// May be empty when `instances` bring cloths.
+    #[serde(default)]
     pub cloths: Vec<ClothSpec>,
     #[serde(default)]
     pub obstacles: Vec<ObstacleSpec>,
+    /// Copies of another scene file's cloths and obstacles, each placed by a transform and
+    /// shifted in time (`scene::load::instance`).
+    #[serde(default)]
+    pub instances: Vec<InstanceSpec>,
     /// Collision handling; defaults apply when absent.
     #[serde(default)]
     pub collision: Option<CollisionSpec>,
@@ -52,6 +58,25 @@ pub struct SceneSpec {
     /// `remeshing`, `separation`, `pop_filter`, `plasticity` (ARCSim's `disable`).
     #[serde(default)]
     pub disable: Vec<String>,
+}
+
+/// One instance: the cloths and obstacles of the scene file `scene` (nothing else of it), named
+/// `<their name>_<name>`, placed by `transform` after their own transforms and motions, and
+/// `time_offset` seconds ahead in their motions: the instance at time t is the original at
+/// t + time_offset.
+#[derive(Deserialize, Debug, Clone)]
+#[serde(deny_unknown_fields)]
+pub struct InstanceSpec {
+    /// Suffix of the instance's cloth and obstacle names (default `i<index>`).
+    #[serde(default)]
+    pub name: Option<String>,
+    /// A scene file (this format, not an ARCSim conf), relative to this scene.
+    pub scene: String,
+    #[serde(default)]
+    pub transform: TransformSpec,
+    /// Seconds (any sign): positive runs the motions ahead, negative holds their start longer.
+    #[serde(default)]
+    pub time_offset: f64,
 }
 
 #[derive(Deserialize, Debug, Clone, Default)]

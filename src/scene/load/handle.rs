@@ -3,6 +3,7 @@
 //! `circle`) and when (`start_time`, `end_time`, `fade_time`).
 
 use super::super::spec::{CircleSpec, HandleSpec};
+use super::instance::Placement;
 use super::{finite3, motion_or_mot, Ctx, Res};
 use crate::collision::shape::{Obstacle, ObstacleShape};
 use crate::math::Vec2;
@@ -10,7 +11,8 @@ use crate::mesh::Mesh;
 use crate::scene::{Circle, FollowObstacle, Handle, HandleKind, Scene};
 
 /// Handle `hs` of a cloth whose input mesh is `local`, its nodes numbered from `node0` in the
-/// scene's mesh (the cloth's nodes already in `scene`, with its obstacles).
+/// scene's mesh (the cloth's nodes already in `scene`, placed, with its obstacles), placed by
+/// `placement` (its motion and times; see `instance`).
 pub(super) fn load_handle(
     ctx: &Ctx,
     hp: &str,
@@ -18,6 +20,7 @@ pub(super) fn load_handle(
     local: &Mesh,
     node0: usize,
     scene: &Scene,
+    placement: &Placement,
 ) -> Res<Handle> {
     let (obstacles, run_start) = (&scene.obstacles, scene.start_time());
     let stiffness = match hs.stiffness {
@@ -66,7 +69,7 @@ pub(super) fn load_handle(
         Some(f) => f,
         None => 0.0,
     };
-    let handle = Handle {
+    let handle = placement.handle(Handle {
         nodes: nodes.iter().map(|n| n + node0).collect(),
         anchors: nodes.iter().map(|&n| scene.mesh.nodes[n + node0].x).collect(),
         kind,
@@ -77,7 +80,7 @@ pub(super) fn load_handle(
         fade,
         stiffness,
         anchor_time: run_start,
-    };
+    });
     // The nodes are anchored through M(t_on)⁻¹: a motion shrunk to a point there has none.
     if handle.kind == HandleKind::Nodes
         && handle.displacement(handle.switch_on_time(), handle.switch_on_time()).is_none()

@@ -15,16 +15,22 @@ use crate::math::motion::{KeyVelocity, Keyframe, Motion, Transform};
 use crate::math::{cross2, Vec2, Vec3};
 use crate::mesh::{rectangle, Face, Mesh, MeshError, Node, NodeId, Vert, VertId};
 
-/// The built-in default shot (`viewcloth simulate` with no scene).
-pub const DEFAULT_SCENE: &str = include_str!("../../../scenes/hanging_sheet.json");
-pub const DEFAULT_SCENE_NAME: &str = "hanging_sheet";
+/// The built-in default shot (`viewcloth simulate` with no scene): `scenes/sheet_drape.json`,
+/// seen by `cameras/sheet_drape.json` (built in too, so the shot needs no file at run time).
+pub const DEFAULT_SCENE: &str = include_str!("../../../scenes/sheet_drape.json");
+pub const DEFAULT_SCENE_NAME: &str = "sheet_drape";
+pub const DEFAULT_CAMERA: &str = include_str!("../../../cameras/sheet_drape.json");
 
 mod constraints;
+mod frame_pattern;
 mod handle;
+mod instance;
 mod obstacle;
 mod remesh;
 use constraints::{lra_params, strain_limits};
+pub(super) use frame_pattern::format_frame;
 use handle::load_handle;
+use instance::{check_unique_names, read_instances, Placement};
 use obstacle::load_obstacle;
 use remesh::remesh_params;
 
@@ -134,7 +140,8 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
         }),
         None => None,
     };
-    if spec.cloths.is_empty() {
+    let instances = read_instances(ctx, &spec.instances)?;
+    if spec.cloths.is_empty() && instances.is_empty() {
         return Err(ctx.err("cloths", "expected at least one cloth"));
     }
     let mut scene = Scene {
@@ -172,8 +179,20 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
         let obstacle = load_obstacle(ctx, o, os)?;
         scene.obstacles.push(obstacle);
     }
+    for instance in &instances {
+        instance.add_obstacles(&mut scene)?;
+    }
     for (c, cs) in spec.cloths.iter().enumerate() {
-        add_cloth(ctx, &mut scene, c, cs)?;
+        add_cloth(ctx, &mut scene, &format!("cloths[{c}]"), cs, &Placement::IDENTITY)?;
+    }
+    for instance in &instances {
+        instance.add_cloths(&mut scene)?;
+    }
+    if scene.cloths.is_empty() {
+        return Err(ctx.err("instances", "expected at least one cloth (the instanced scenes have none)"));
+    }
+    if !instances.is_empty() {
+        check_unique_names(ctx, &scene)?;
     }
     for cloth in &mut scene.cloths {
         if off.contains(&"remeshing") {
@@ -274,6 +293,15 @@ fn collision_params(ctx: &Ctx, spec: Option<&CollisionSpec>) -> Res<CollisionPar
         };
     }
     Ok(p)
+}
+
+/// A finite time (seconds, any sign).
+fn finite_time(ctx: &Ctx, path: &str, t: f64) -> Res<f64> {
+    if t.is_finite() {
+        Ok(t)
+    } else {
+        Err(ctx.err(path, format!("expected a finite time in seconds, got {t}")))
+    }
 }
 
 fn non_negative(ctx: &Ctx, path: &str, v: f64) -> Res<f64> {
@@ -407,8 +435,9 @@ fn cloth_mesh(ctx: &Ctx, path: &str, cs: &ClothSpec) -> Res<(Mesh, f64)> {
     }
 }
 
-fn add_cloth(ctx: &Ctx, scene: &mut Scene, c: usize, cs: &ClothSpec) -> Res<()> {
-    let path = format!("cloths[{c}]");
+/// Adds the cloth `cs` (at `path` in its file) to `scene`, placed by `placement`.
+fn add_cloth(ctx: &Ctx, scene: &mut Scene, path: &str, cs: &ClothSpec, placement: &Placement) -> Res<()> {
+    let c = scene.cloths.len();
     positive(ctx, &format!("{path}.uv_scale"), cs.uv_scale)?;
     let material = match &cs.material.arcsim {
         Some(file) => {
@@ -427,17 +456,24 @@ fn add_cloth(ctx: &Ctx, scene: &mut Scene, c: usize, cs: &ClothSpec) -> Res<()> 
         }
     };
     let xf = transform(ctx, &format!("{path}.transform"), &cs.transform)?;
-    let velocity = finite3(ctx, &format!("{path}.velocity"), cs.velocity)?;
-    let (mut local, unit) = cloth_mesh(ctx, &path, cs)?;
-    let uv_unit = unit * xf.scale;
-    // ARCSim: a cloth's scale also scales its material coordinates.
+    let velocity = placement.vector(&finite3(ctx, &format!("{path}.velocity"), cs.velocity)?);
+    let (mut local, unit) = cloth_mesh(ctx, path, cs)?;
+    // ARCSim: a cloth's scale also scales its material coordinates (an instance's too).
+    let scale = xf.scale * placement.transform.scale;
+    let uv_unit = unit * scale;
     for v in &mut local.verts {
-        v.u *= xf.scale;
+        v.u *= scale;
     }
     let (node0, vert0) = (scene.mesh.nodes.len(), scene.mesh.verts.len());
     let name = cs.name.clone().unwrap_or_else(|| format!("cloth{c}"));
     for n in &local.nodes {
-        scene.mesh.nodes.push(Node { x: xf.apply(&n.x), v: velocity, a: Vec3::zeros(), mass: 0.0, cloth: c as u16 });
+        scene.mesh.nodes.push(Node {
+            x: placement.point(&xf.apply(&n.x)),
+            v: velocity,
+            a: Vec3::zeros(),
+            mass: 0.0,
+            cloth: c as u16,
+        });
     }
     for v in &local.verts {
         scene.mesh.verts.push(Vert { u: v.u, node: NodeId(v.node.0 + node0 as u32) });
@@ -446,7 +482,7 @@ fn add_cloth(ctx: &Ctx, scene: &mut Scene, c: usize, cs: &ClothSpec) -> Res<()> 
         scene.mesh.faces.push(Face { v: f.v.map(|v| VertId(v.0 + vert0 as u32)), material: c as u16 });
     }
     for (h, hs) in cs.handles.iter().enumerate() {
-        let handle = load_handle(ctx, &format!("{path}.handles[{h}]"), hs, &local, node0, scene)?;
+        let handle = load_handle(ctx, &format!("{path}.handles[{h}]"), hs, &local, node0, scene, placement)?;
         scene.handles.push(handle);
     }
     let remesh = cs.remesh.as_ref().map(|r| remesh_params(ctx, &format!("{path}.remesh"), r)).transpose()?;
@@ -602,60 +638,4 @@ fn orient_faces(mesh: &mut Mesh) -> Result<(), (usize, String)> {
         }
     }
     Ok(())
-}
-
-/// Substitutes the frame number for the one frame token in `pattern`: printf's `%d` / `%0Nd`,
-/// Houdini's `$F` / `$FN` (zero-padded to N digits), or a run of N `#` (zero-padded to N).
-pub(super) fn format_frame(pattern: &str, n: i64) -> Result<String, String> {
-    let bad =
-        || format!("expected one frame number token, %04d, $F4 or #### (e.g. \"body_%04d.obj\"), in \"{pattern}\"");
-    let tokens = [pattern.find('%'), pattern.find("$F"), pattern.find('#')];
-    let (start, len, width, zero) = match tokens {
-        [Some(start), None, None] => {
-            let rest = &pattern[start + 1..];
-            let digits = rest.find(|c: char| !c.is_ascii_digit()).ok_or_else(bad)?;
-            if !rest[digits..].starts_with('d') {
-                return Err(bad());
-            }
-            let width: usize = if digits == 0 { 0 } else { rest[..digits].parse().map_err(|_| bad())? };
-            (start, digits + 2, width, rest.starts_with('0'))
-        }
-        [None, Some(start), None] => {
-            let rest = &pattern[start + 2..];
-            let digits = rest.find(|c: char| !c.is_ascii_digit()).unwrap_or(rest.len());
-            let width: usize = if digits == 0 { 0 } else { rest[..digits].parse().map_err(|_| bad())? };
-            (start, digits + 2, width, true)
-        }
-        [None, None, Some(start)] => {
-            let hashes = pattern[start..].find(|c: char| c != '#').unwrap_or(pattern.len() - start);
-            (start, hashes, hashes, true)
-        }
-        _ => return Err(bad()),
-    };
-    let tail = &pattern[start + len..];
-    if tail.contains(['%', '#']) || tail.contains("$F") || width > 20 {
-        return Err(bad());
-    }
-    let number = if zero { format!("{n:0width$}") } else { format!("{n:width$}") };
-    Ok(format!("{}{number}{tail}", &pattern[..start]))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::format_frame;
-
-    #[test]
-    fn frame_tokens_of_printf_houdini_and_hashes() {
-        for pattern in ["body_%04d.obj", "body_$F4.obj", "body_####.obj"] {
-            assert_eq!(format_frame(pattern, 7).unwrap(), "body_0007.obj", "{pattern}");
-            assert_eq!(format_frame(pattern, 12345).unwrap(), "body_12345.obj", "{pattern}");
-        }
-        assert_eq!(format_frame("b%d.obj", 7).unwrap(), "b7.obj");
-        assert_eq!(format_frame("b$F.obj", 7).unwrap(), "b7.obj");
-        assert_eq!(format_frame("b#.obj", 7).unwrap(), "b7.obj");
-        assert_eq!(format_frame("b%3d.obj", 7).unwrap(), "b  7.obj");
-        for bad in ["body.obj", "b%04d_%d.obj", "b$F4_####.obj", "b%s.obj", "b##_#.obj", "b%04.obj"] {
-            assert!(format_frame(bad, 1).is_err(), "{bad}");
-        }
-    }
 }
