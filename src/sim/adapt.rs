@@ -4,11 +4,12 @@
 
 use std::time::Instant;
 
+use crate::io::stats::ViewFrameStats;
 use crate::math::{Mat2, Real};
 use crate::remesh::rest_shape::{edge_angles_from_shapes, face_shapes};
 use crate::remesh::{remesh, Finished, RemeshLimits, RemeshStats};
 use crate::scene::RemeshMode;
-use crate::sizing::view::face_views;
+use crate::sizing::view::{face_views, view_summary};
 use crate::sizing::{face_metrics, vertex_metrics, FaceView, ObstaclePlane, SizingParams};
 
 use super::state::glue_pairs;
@@ -89,6 +90,14 @@ impl Simulation {
         let views = face_views(&self.state.mesh, camera, self.state.time, dt, &params);
         self.ws.timers.since(Stage::View, clock);
         views
+    }
+
+    /// The view-dependent cloths' view at the frame end, for stats.json (`None` outside view
+    /// mode).
+    pub(super) fn view_stats(&mut self) -> Option<ViewFrameStats> {
+        let views = self.face_views();
+        let camera = self.scene.camera.as_ref()?;
+        (!views.is_empty()).then(|| view_summary(&self.state.mesh, camera, self.state.time, &views))
     }
 
     /// Remeshes the cloths in `mode` to their sizing field (for `Uniform`: once, to the

@@ -26,7 +26,7 @@ mod remesh;
 use constraints::{lra_params, strain_limits};
 use handle::load_handle;
 use obstacle::load_obstacle;
-use remesh::remesh_params;
+use remesh::{remesh_params, view_sides};
 
 type Res<T> = Result<T, InputError>;
 
@@ -449,7 +449,8 @@ fn add_cloth(ctx: &Ctx, scene: &mut Scene, c: usize, cs: &ClothSpec) -> Res<()> 
         let handle = load_handle(ctx, &format!("{path}.handles[{h}]"), hs, &local, node0, scene)?;
         scene.handles.push(handle);
     }
-    let remesh = cs.remesh.as_ref().map(|r| remesh_params(ctx, &format!("{path}.remesh"), r)).transpose()?;
+    let sides = view_sides(&local, cs);
+    let remesh = cs.remesh.as_ref().map(|r| remesh_params(ctx, &format!("{path}.remesh"), r, sides)).transpose()?;
     let lra = cs.lra.as_ref().map(|l| lra_params(ctx, &format!("{path}.lra"), l)).transpose()?;
     let strain_limits =
         cs.strain_limits.map(|l| strain_limits(ctx, &format!("{path}.strain_limits"), l)).transpose()?;
