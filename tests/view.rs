@@ -156,3 +156,22 @@ fn view_mode_without_a_camera_is_refused_in_one_line() {
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
     assert!(err.contains("cloths[0].remesh.mode") && err.contains("camera"), "{err}");
 }
+
+#[test]
+fn view_runs_report_view_factor_and_frame_counts_per_frame_and_other_runs_do_not() {
+    // Issue 19: stats.json's per-frame view fields, present only in view mode.
+    let cam_file = camera();
+    let view = simulate(&temp_dir("view_stats"), &["--frames", "12", "--camera", cam_file.to_str().unwrap()]);
+    let mut out_seen = false;
+    for f in view["frames"].as_array().unwrap() {
+        let mu = f["view_mean_mu"].as_f64().expect("view_mean_mu in view mode");
+        assert!(mu > 0.0 && mu <= 1.0, "mean μ {mu}");
+        let (inside, outside) =
+            (f["view_faces_in_frame"].as_u64().unwrap(), f["view_faces_out_of_frame"].as_u64().unwrap());
+        assert_eq!(inside + outside, f["faces"].as_u64().unwrap(), "every face is in or out of frame");
+        out_seen |= outside > 0;
+    }
+    assert!(out_seen, "the pan leaves part of the sheet out of frame");
+    let adaptive = simulate(&temp_dir("adaptive_stats"), &["--frames", "2"]);
+    assert!(adaptive["frames"][1].get("view_mean_mu").is_none());
+}

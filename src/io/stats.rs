@@ -54,6 +54,22 @@ pub struct FrameStats {
     /// Present when a cloth has strain limits.
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub strain_limit: Option<StrainLimitFrameStats>,
+    /// Present in view mode (a cloth remeshes with view factors and the shot has a camera).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub view: Option<ViewFrameStats>,
+}
+
+/// The camera's view of the view-dependent cloths' faces at the frame end, seen from the
+/// camera at the frame's time (`sizing::view::view_summary`).
+#[derive(Serialize, Deserialize, Debug, Clone, Default, PartialEq)]
+pub struct ViewFrameStats {
+    /// Mean of the view factor μ′₃ the sizing uses (Koh et al. 2014, eq. 9: the lookahead
+    /// window's weighted maximum), weighted by world-space face area.
+    pub view_mean_mu: f64,
+    /// Faces whose centroid is inside the view frustum (signed distance to its planes ≤ 0).
+    pub view_faces_in_frame: usize,
+    /// The other view-dependent faces: centroid outside the frustum.
+    pub view_faces_out_of_frame: usize,
 }
 
 /// Long range attachments at the frame end (`constraints::lra`).

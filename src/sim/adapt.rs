@@ -5,11 +5,12 @@
 use std::time::Instant;
 
 use crate::forces::buckling::compensation;
+use crate::io::stats::ViewFrameStats;
 use crate::math::{Mat2, Real};
 use crate::remesh::rest_shape::{edge_angles_from_shapes, face_shapes};
 use crate::remesh::{remesh, Finished, RemeshLimits, RemeshStats};
 use crate::scene::RemeshMode;
-use crate::sizing::view::face_views;
+use crate::sizing::view::{face_views, view_summary};
 use crate::sizing::view_memory;
 use crate::sizing::{face_metrics, vertex_metrics, FaceView, ObstaclePlane, SizingParams};
 
@@ -100,6 +101,14 @@ impl Simulation {
         view_memory::apply_floor(&self.state.mesh, &mut views, &self.state.view_memory, &drop);
         self.ws.timers.since(Stage::View, clock);
         views
+    }
+
+    /// The view-dependent cloths' view at the frame end, for stats.json (`None` outside view
+    /// mode).
+    pub(super) fn view_stats(&mut self) -> Option<ViewFrameStats> {
+        let views = self.face_views();
+        let camera = self.scene.camera.as_ref()?;
+        (!views.is_empty()).then(|| view_summary(&self.state.mesh, camera, self.state.time, &views))
     }
 
     /// Remeshes the cloths in `mode` to their sizing field (for `Uniform`: once, to the

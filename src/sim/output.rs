@@ -248,6 +248,7 @@ fn frame_stats(sim: &mut Simulation, number: usize, adaptive: bool) -> FrameStat
     (fs.crossings_self, fs.crossings_obstacle) = (crossings.cloth.len(), crossings.obstacle.len());
     sim.ws.timers.since(Stage::CrossingCheck, check);
     sim.constraint_stats(&mut fs);
+    fs.view = sim.view_stats();
     let faults = std::mem::take(&mut sim.ws.faults);
     fs.steps = faults.steps;
     fs.retries = faults.retries;

@@ -17,6 +17,7 @@
 use rayon::prelude::*;
 
 use crate::camera::{Camera, View};
+use crate::io::stats::ViewFrameStats;
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
 
@@ -38,13 +39,17 @@ pub struct ViewParams {
     /// Time (s) ahead held at full weight (eq. 9).
     pub hold: Real,
     /// Both sides of the cloth can be seen: orientation uses |cos θ|. Koh et al. coarsen the
-    /// back side (a garment's inside); a single-layer sheet is visible from both sides.
+    /// back side (a garment's inside); a single-layer sheet is visible from both sides. The
+    /// scene loader decides the default per cloth (`scene::load::view_sides`).
     pub two_sided: bool,
     /// Seconds over which a face's view factor may fall from 1 to 0 (smoothed coarsening,
     /// `view_memory`); 0 lets it fall at once. Defaults to `window`.
     pub coarsen_time: Real,
     /// Coarsened faces keep only part of their compressive stress (`forces::buckling`).
     pub buckling_compensation: bool,
+    /// +1 when the faces' normals (counter-clockwise winding) point to the side seen, −1 when
+    /// they point to the back (a garment modelled with inward normals); used when one-sided.
+    pub front: Real,
 }
 
 impl Default for ViewParams {
@@ -60,6 +65,7 @@ impl Default for ViewParams {
             two_sided: true,
             coarsen_time: 0.4,
             buckling_compensation: false,
+            front: 1.0,
         }
     }
 }
@@ -82,9 +88,10 @@ pub fn scaled_cos(cos: Real, k_cos: Real) -> Real {
     }
 }
 
-/// Orientation view factor μ₁, eq. 2.
+/// Orientation view factor μ₁, eq. 2; `cos` is that of the winding normal with the direction
+/// to the eye, turned to the seen side by `front` when one-sided.
 pub fn mu_orientation(cos: Real, p: &ViewParams) -> Real {
-    let c = scaled_cos(if p.two_sided { cos.abs() } else { cos }, p.k_cos);
+    let c = scaled_cos(if p.two_sided { cos.abs() } else { p.front * cos }, p.k_cos);
     (1.0 - c) * p.mu_back + c
 }
 
@@ -159,6 +166,28 @@ pub fn face_views(
         .collect()
 }
 
+/// Area-weighted mean μ′₃ over the faces with a view (`views` from `face_views`), and how many
+/// of them have their centroid inside / outside the frustum of the camera at time `t`.
+pub fn view_summary(mesh: &Mesh, camera: &Camera, t: Real, views: &[Option<FaceView>]) -> ViewFrameStats {
+    let now = camera.view_at(t);
+    let (mut weighted, mut area) = (0.0, 0.0);
+    let mut out = ViewFrameStats::default();
+    for (f, v) in views.iter().enumerate() {
+        let Some(v) = v else { continue };
+        let x = mesh.face_nodes(f).map(|n| mesh.nodes[n].x);
+        let a = 0.5 * (x[1] - x[0]).cross(&(x[2] - x[0])).norm();
+        weighted += a * v.mu;
+        area += a;
+        if now.frustum_distance(&((x[0] + x[1] + x[2]) / 3.0)) <= 0.0 {
+            out.view_faces_in_frame += 1;
+        } else {
+            out.view_faces_out_of_frame += 1;
+        }
+    }
+    out.view_mean_mu = if area > 0.0 { weighted / area } else { 0.0 };
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -182,6 +211,10 @@ mod tests {
         assert!((mu_orientation(0.0, &one_sided) - 0.28).abs() < 1e-15);
         let two_sided = ViewParams::default();
         assert!((mu_orientation(-1.0, &two_sided) - 1.0).abs() < 1e-15);
+        // Inward normals: the winding's back is the seen side.
+        let inward = ViewParams { two_sided: false, front: -1.0, ..Default::default() };
+        assert!((mu_orientation(-1.0, &inward) - 1.0).abs() < 1e-15);
+        assert!((mu_orientation(1.0, &inward) - 0.1).abs() < 1e-15);
     }
 
     #[test]

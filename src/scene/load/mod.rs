@@ -32,7 +32,7 @@ pub(super) use frame_pattern::format_frame;
 use handle::load_handle;
 use instance::{check_unique_names, read_instances, Placement};
 use obstacle::load_obstacle;
-use remesh::remesh_params;
+use remesh::{remesh_params, view_sides};
 
 type Res<T> = Result<T, InputError>;
 
@@ -485,7 +485,8 @@ fn add_cloth(ctx: &Ctx, scene: &mut Scene, path: &str, cs: &ClothSpec, placement
         let handle = load_handle(ctx, &format!("{path}.handles[{h}]"), hs, &local, node0, scene, placement)?;
         scene.handles.push(handle);
     }
-    let remesh = cs.remesh.as_ref().map(|r| remesh_params(ctx, &format!("{path}.remesh"), r)).transpose()?;
+    let sides = view_sides(&local, cs);
+    let remesh = cs.remesh.as_ref().map(|r| remesh_params(ctx, &format!("{path}.remesh"), r, sides)).transpose()?;
     let lra = cs.lra.as_ref().map(|l| lra_params(ctx, &format!("{path}.lra"), l)).transpose()?;
     let strain_limits =
         cs.strain_limits.map(|l| strain_limits(ctx, &format!("{path}.strain_limits"), l)).transpose()?;
