@@ -311,6 +311,20 @@ fn cases() -> Vec<Case> {
             "(0, 1]",
         ),
         json(
+            "image_height_zero",
+            rect.replace("\"material\"", &format!("{REMESH},\n      \"material\""))
+                .replace("\"aspect_min\": 0.2", "\"aspect_min\": 0.2, \"view\": { \"min_edge_pixels\": 2, \"image_height\": 0 }"),
+            Loc::Field("cloths[0].remesh.view.image_height"),
+            "1..=100000",
+        ),
+        json(
+            "min_edge_pixels_negative",
+            rect.replace("\"material\"", &format!("{REMESH},\n      \"material\""))
+                .replace("\"aspect_min\": 0.2", "\"aspect_min\": 0.2, \"view\": { \"min_edge_pixels\": -1 }"),
+            Loc::Field("cloths[0].remesh.view.min_edge_pixels"),
+            "(0, 10000]",
+        ),
+        json(
             "size_min_above_max",
             rect.replace("\"material\"", &format!("{REMESH},\n      \"material\"")).replace("[0.01, 0.2]", "[0.2, 0.01]"),
             Loc::Field("cloths[0].remesh.size"),

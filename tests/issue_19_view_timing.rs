@@ -177,3 +177,37 @@ fn cloth_the_camera_turns_to_is_refined_before_it_enters_the_frame() {
     assert_eq!(e0, e, "same camera, same entry");
     assert!(inside0 / at_entry0 > 1.5, "without the window: {at_entry0} faces at entry, {inside0} inside");
 }
+
+/// The wavy sheet at rest 3 m below a camera that zooms from 40° to 4° between t = 0.8 and 1.0 s.
+fn zoomed(view: Value) -> Value {
+    json!({
+        "version": 1, "frame_time": 0.04, "steps_per_frame": 2, "frames": 25, "gravity": [0, 0, 0],
+        "camera": "camera.json",
+        "cloths": [{
+            "mesh": "wavy.obj", "material": { "preset": "cotton" },
+            "remesh": { "mode": "view", "refine_angle": 0.3, "size": [0.01, 0.2], "aspect_min": 0.2, "view": view }
+        }]
+    })
+}
+
+#[test]
+fn a_zoom_refines_by_screen_size_and_before_it_happens() {
+    let dir = temp_dir("zoom");
+    wavy_sheet(&dir.join("wavy.obj"));
+    let key = |t: f64, fov: f64| json!({ "time": t, "position": [0.2, 0.2, 3.0], "target": [0.2, 0.2, 0.0], "up": [0, 1, 0], "fov": fov });
+    write_camera(&dir, json!([key(0.0, 40.0), key(0.8, 40.0), key(1.0, 4.0)]));
+    // Two pixels of a 270-pixel image: 16 mm at 40°, 1.6 mm at 4° (the 1 cm minimum then).
+    let px = json!({ "min_edge_pixels": 2, "image_height": 270 });
+    let f = faces(&run(&dir, &zoomed(px.clone()), "pixels"));
+    // Frame 10 (0.4 s): before the window sees the zoom; frame 19 (0.76 s): before it starts.
+    assert!(f[19] >= 1.5 * f[10], "refined before the zoom: frame 10 {}, frame 19 {}; {f:?}", f[10], f[19]);
+    let mut no_window = px;
+    no_window["window"] = json!(0);
+    no_window["hold"] = json!(0);
+    let g = faces(&run(&dir, &zoomed(no_window), "no_window"));
+    assert_eq!(g[19], g[10], "without the window nothing happens before the zoom: {g:?}");
+    assert!(g[24] >= 1.3 * g[10], "and it refines once zoomed: {g:?}");
+    // The distance-only term (k_dist · d, the default) does not see a zoom.
+    let k = faces(&run(&dir, &zoomed(json!({})), "k_dist"));
+    assert!(k[24] <= 1.1 * k[10], "k_dist: {k:?}");
+}

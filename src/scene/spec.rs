@@ -230,6 +230,10 @@ pub struct ViewSpec {
     #[serde(default)]
     pub k_dist: Option<f64>,
     #[serde(default)]
+    pub min_edge_pixels: Option<f64>,
+    #[serde(default)]
+    pub image_height: Option<i64>,
+    #[serde(default)]
     pub window: Option<f64>,
     #[serde(default)]
     pub hold: Option<f64>,

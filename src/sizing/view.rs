@@ -34,6 +34,12 @@ pub struct ViewParams {
     pub margin: Real,
     /// Minimum edge length per metre of distance to the eye (eq. 10).
     pub k_dist: Real,
+    /// When set, the distance term of eq. 10 is the world size of this many pixels of an image
+    /// `image_height` pixels high at the face (`pixel_size_min`), so that a zoom or a dolly
+    /// changes the resolution; `k_dist` is then unused.
+    pub min_edge_pixels: Option<Real>,
+    /// Height (pixels) of the rendered image, for `min_edge_pixels`.
+    pub image_height: Real,
     /// Lookahead window (s) over which the weights fall to 0 (eqs. 6–8).
     pub window: Real,
     /// Time (s) ahead held at full weight (eq. 9).
@@ -60,6 +66,8 @@ impl Default for ViewParams {
             mu_out: 0.1,
             margin: 0.2,
             k_dist: 0.005,
+            min_edge_pixels: None,
+            image_height: 1080.0,
             window: 0.4,
             hold: 0.2,
             two_sided: true,
@@ -134,6 +142,19 @@ pub fn lookahead(dt: Real, p: &ViewParams) -> Vec<(Real, Real)> {
     out
 }
 
+/// The minimum edge at `x` from its size on screen: an edge `px` pixels long in an image `height`
+/// pixels high seen by `view` is 2 d tan(fov/2) px / height long at distance d (eq. 10 with
+/// k_dist = 2 tan(fov/2) px / height, so a zoom or dolly changes it). Over the lookahead window
+/// the finest demand wins, weighted as the view factors are (eq. 6, on 1/l): min over samples of
+/// l_s / w_s, so a zoom is anticipated by the window's `hold` and ramp.
+pub fn pixel_size_min(x: &Vec3, samples: &[(View, Real)], px: Real, height: Real) -> Real {
+    samples
+        .iter()
+        .filter(|(_, w)| *w > 0.0)
+        .map(|(view, w)| 2.0 * view.eye_distance(x) * view.tan_half_fov * px / height / w)
+        .fold(Real::INFINITY, Real::min)
+}
+
 /// View factor and minimum edge length of every face at time `t`, remeshing every `dt`
 /// seconds. `params[material]` holds the view parameters and minimum edge length of each
 /// view-dependent cloth; faces of other cloths get `None`.
@@ -161,7 +182,11 @@ pub fn face_views(
             let centroid: Vec3 = (x[0] + x[1] + x[2]) / 3.0;
             let mu =
                 samples[material].iter().map(|(view, w)| w * triangle_view_factor(&x, view, &p)).fold(0.0, Real::max);
-            Some(FaceView { mu, size_min: size_min.max(p.k_dist * now.eye_distance(&centroid)) })
+            let distance_term = match p.min_edge_pixels {
+                Some(px) => pixel_size_min(&centroid, &samples[material], px, p.image_height),
+                None => p.k_dist * now.eye_distance(&centroid),
+            };
+            Some(FaceView { mu, size_min: size_min.max(distance_term) })
         })
         .collect()
 }
@@ -240,5 +265,25 @@ mod tests {
         assert_eq!(at(-0.1), Some(0.75));
         assert_eq!(at(-0.3), Some(0.25));
         assert_eq!(at(-0.4), None);
+    }
+
+    #[test]
+    fn pixel_size_is_the_finest_weighted_demand_over_the_window() {
+        let cam = |fov: Real| {
+            let text = format!(
+                r#"{{"version": 1, "keys": [{{"time": 0, "position": [0, 0, 2], "target": [0, 0, 0], "up": [0, 1, 0], "fov": {fov}}}]}}"#
+            );
+            Camera::from_json(&text, std::path::Path::new("c.json")).unwrap().view_at(0.0)
+        };
+        let x = Vec3::zeros();
+        let wide = cam(40.0);
+        let l = pixel_size_min(&x, &[(wide, 1.0)], 2.0, 1080.0);
+        let expected = 2.0 * 2.0 * (20.0 as Real).to_radians().tan() * 2.0 / 1080.0;
+        assert!((l - expected).abs() < 1e-15, "{l} vs {expected}");
+        // A zoom 10× narrower at half weight: 1/10 the size, over 1/2 the weight.
+        let narrow = cam(2.0 * (0.1 * (20.0 as Real).to_radians().tan()).atan().to_degrees());
+        let l2 = pixel_size_min(&x, &[(wide, 1.0), (narrow, 0.5)], 2.0, 1080.0);
+        assert!((l2 - expected * 0.2).abs() < 1e-12, "{l2} vs {}", expected * 0.2);
+        assert_eq!(pixel_size_min(&x, &[(narrow, 0.0)], 2.0, 1080.0), Real::INFINITY, "weight 0 is not sampled");
     }
 }

@@ -118,6 +118,19 @@ fn view_params(ctx: &Ctx, path: &str, v: Option<&ViewSpec>, sides: (bool, Real))
     check("mu_out", v.mu_out, 0.0, 1.0, true, &mut p.mu_out)?;
     check("margin", v.margin, 0.0, 1e3, false, &mut p.margin)?;
     check("k_dist", v.k_dist, 0.0, 1.0, false, &mut p.k_dist)?;
+    if let Some(px) = v.min_edge_pixels {
+        let mut x = 0.0;
+        check("min_edge_pixels", Some(px), 0.0, 1e4, true, &mut x)?;
+        p.min_edge_pixels = Some(x);
+    }
+    if let Some(h) = v.image_height {
+        if !(1..=100_000).contains(&h) {
+            return Err(
+                ctx.err(format!("{path}.image_height"), format!("expected an integer 1..=100000 (pixels), got {h}"))
+            );
+        }
+        p.image_height = h as Real;
+    }
     check("window", v.window, 0.0, 1e3, false, &mut p.window)?;
     check("hold", v.hold, 0.0, 1e3, false, &mut p.hold)?;
     p.coarsen_time = p.window;
