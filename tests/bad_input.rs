@@ -318,6 +318,13 @@ fn cases() -> Vec<Case> {
             "1..=100000",
         ),
         json(
+            "occlusion_pixels_too_large",
+            rect.replace("\"material\"", &format!("{REMESH},\n      \"material\""))
+                .replace("\"aspect_min\": 0.2", "\"aspect_min\": 0.2, \"view\": { \"occlusion_pixels\": 100000 }"),
+            Loc::Field("cloths[0].remesh.view.occlusion_pixels"),
+            "0..=4096",
+        ),
+        json(
             "min_edge_pixels_negative",
             rect.replace("\"material\"", &format!("{REMESH},\n      \"material\""))
                 .replace("\"aspect_min\": 0.2", "\"aspect_min\": 0.2, \"view\": { \"min_edge_pixels\": -1 }"),

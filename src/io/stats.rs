@@ -70,6 +70,10 @@ pub struct ViewFrameStats {
     pub view_faces_in_frame: usize,
     /// The other view-dependent faces: centroid outside the frustum.
     pub view_faces_out_of_frame: usize,
+    /// Faces in frame that are mostly hidden from the camera behind obstacles or cloth: less
+    /// than half of their sample points seen (`sizing::occlusion`); 0 when occlusion is off.
+    #[serde(default)]
+    pub view_faces_occluded: usize,
 }
 
 /// Long range attachments at the frame end (`constraints::lra`).

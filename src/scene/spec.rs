@@ -243,6 +243,8 @@ pub struct ViewSpec {
     pub coarsen_time: Option<f64>,
     #[serde(default)]
     pub buckling_compensation: Option<bool>,
+    #[serde(default)]
+    pub occlusion_pixels: Option<i64>,
 }
 
 #[derive(Deserialize, Debug, Clone)]

@@ -12,6 +12,7 @@ use crate::math::Real;
 use crate::mesh::Mesh;
 use crate::remesh::RemeshStats;
 use crate::scene::Scene;
+use crate::sizing::FaceView;
 use crate::solver::pattern::BlockPattern;
 use crate::solver::ImplicitSystem;
 
@@ -46,6 +47,10 @@ pub struct Workspace {
     /// Cloth nodes inside two obstacles at the current step, held where they are
     /// (`separate.rs`); empty unless the separation stage runs.
     pub trapped: Vec<usize>,
+    /// The last view factors computed (`adapt::face_views`) and the fingerprint of the state
+    /// they were computed for: the frame end's stats and the next frame's remesh see the same
+    /// state, so the second reuses the first.
+    pub views: Option<(u64, Vec<Option<FaceView>>)>,
 }
 
 impl Workspace {
@@ -72,6 +77,7 @@ impl Workspace {
             faults: FaultStats::default(),
             constraints: Constraints::build(scene, state),
             trapped: Vec::new(),
+            views: None,
         })
     }
 

@@ -4,6 +4,7 @@
 //! obstacle proximity, combined by tensor max (or sum) and clamped to the size limits and the
 //! minimum aspect ratio (eqs. 2–6 and §3.4; formulas as in DESIGN.md "Sizing field").
 
+pub mod occlusion;
 pub mod tensor_max;
 pub mod view;
 pub mod view_memory;
@@ -337,7 +338,7 @@ mod tests {
         f.x = f.u.map(|u| Vec3::new(0.98 * u.x, u.y, 0.0));
         f.v = [Vec3::zeros(), Vec3::new(0.0, 0.0, 1.0), Vec3::zeros()];
         let plain = face_criteria(&f, &p);
-        f.view = Some(FaceView { mu: 0.5, size_min: p.size_min });
+        f.view = Some(FaceView { mu: 0.5, size_min: p.size_min, visible: 1.0 });
         let seen = face_criteria(&f, &p);
         assert!(plain[0].norm() > 0.0 && plain[1].norm() > 0.0 && plain[2].norm() > 0.0);
         assert!((seen[0] - plain[0] * 0.25).norm() <= 1e-12 * plain[0].norm(), "{} vs {}", seen[0], plain[0]);
@@ -353,10 +354,10 @@ mod tests {
         f.theta = [3.0, 3.0, 3.0];
         let fine = face_sizing(&f, &p);
         assert!((eigen_sym2(&fine).0.max() - 1.0 / (p.size_min * p.size_min)).abs() < 1e-6);
-        f.view = Some(FaceView { mu: 1.0, size_min: 0.05 });
+        f.view = Some(FaceView { mu: 1.0, size_min: 0.05, visible: 1.0 });
         let far = face_sizing(&f, &p);
         assert!((eigen_sym2(&far).0.max() - 400.0).abs() < 1e-9, "{far}");
-        f.view = Some(FaceView { mu: 1.0, size_min: 10.0 });
+        f.view = Some(FaceView { mu: 1.0, size_min: 10.0, visible: 1.0 });
         let beyond = face_sizing(&f, &p);
         assert!((eigen_sym2(&beyond).0.max() - 1.0 / (p.size_max * p.size_max)).abs() < 1e-9, "{beyond}");
     }

@@ -12,7 +12,8 @@
 //!   and stays refined briefly after it leaves (eqs. 6–9).
 //!
 //! The cloth's motion over the window is not predicted (the paper's choice): the current
-//! geometry is seen from each camera time.
+//! geometry is seen from each camera time. Beyond the paper, cloth hidden behind obstacles or
+//! other cloth is coarsened like cloth out of frame (`occlusion`).
 
 use rayon::prelude::*;
 
@@ -20,6 +21,8 @@ use crate::camera::{Camera, View};
 use crate::io::stats::ViewFrameStats;
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
+
+use super::occlusion::{occluded_factor, DepthMap};
 
 /// Koh et al.'s parameters (their values as defaults).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -56,6 +59,9 @@ pub struct ViewParams {
     /// +1 when the faces' normals (counter-clockwise winding) point to the side seen, −1 when
     /// they point to the back (a garment modelled with inward normals); used when one-sided.
     pub front: Real,
+    /// Height (pixels) of the depth images that decide occlusion at each camera time of the
+    /// window (`occlusion`); 0 turns occlusion off.
+    pub occlusion_pixels: usize,
 }
 
 impl Default for ViewParams {
@@ -74,6 +80,7 @@ impl Default for ViewParams {
             coarsen_time: 0.4,
             buckling_compensation: false,
             front: 1.0,
+            occlusion_pixels: 128,
         }
     }
 }
@@ -85,6 +92,9 @@ pub struct FaceView {
     pub mu: Real,
     /// l_min,vd = max(l_min, k_dist · d) (eq. 10), d the distance to the eye now.
     pub size_min: Real,
+    /// Share of the face seen from the camera now, not hidden behind obstacles or cloth
+    /// (`occlusion`); 1 when occlusion is off.
+    pub visible: Real,
 }
 
 /// Non-uniformly scaled cosine, eq. 1.
@@ -155,21 +165,32 @@ pub fn pixel_size_min(x: &Vec3, samples: &[(View, Real)], px: Real, height: Real
         .fold(Real::INFINITY, Real::min)
 }
 
+/// Obstacle triangles at a time, for occlusion: (positions, triangles) of the bodies present.
+pub type Soup = (Vec<Vec3>, Vec<[usize; 3]>);
+
 /// View factor and minimum edge length of every face at time `t`, remeshing every `dt`
 /// seconds. `params[material]` holds the view parameters and minimum edge length of each
-/// view-dependent cloth; faces of other cloths get `None`.
+/// view-dependent cloth; faces of other cloths get `None`. `obstacles_at(t)` gives the
+/// obstacles that can hide cloth at a camera time (with the whole cloth mesh, as it is now,
+/// they make the depth images of `occlusion`).
 pub fn face_views(
     mesh: &Mesh,
     camera: &Camera,
     t: Real,
     dt: Real,
     params: &[Option<(ViewParams, Real)>],
+    obstacles_at: &dyn Fn(Real) -> Soup,
 ) -> Vec<Option<FaceView>> {
-    let samples: Vec<Vec<_>> = params
+    let depth_maps = DepthMaps::new(mesh, camera, t, dt, params, obstacles_at);
+    let offsets: Vec<Vec<(Real, Real)>> =
+        params.iter().map(|p| p.as_ref().map_or(Vec::new(), |(p, _)| lookahead(dt, p))).collect();
+    let samples: Vec<Vec<(View, Real)>> =
+        offsets.iter().map(|o| o.iter().map(|&(off, w)| (camera.view_at(t + off), w)).collect()).collect();
+    let maps: Vec<Vec<Option<&DepthMap>>> = offsets
         .iter()
-        .map(|p| match p {
-            Some((p, _)) => lookahead(dt, p).into_iter().map(|(off, w)| (camera.view_at(t + off), w)).collect(),
-            None => Vec::new(),
+        .zip(params)
+        .map(|(o, p)| {
+            o.iter().map(|&(off, _)| depth_maps.get(off, dt, p.map_or(0, |(p, _)| p.occlusion_pixels))).collect()
         })
         .collect();
     let now = camera.view_at(t);
@@ -180,19 +201,95 @@ pub fn face_views(
             let (p, size_min) = params.get(material).copied().flatten()?;
             let x = mesh.face_nodes(f).map(|n| mesh.nodes[n].x);
             let centroid: Vec3 = (x[0] + x[1] + x[2]) / 3.0;
-            let mu =
-                samples[material].iter().map(|(view, w)| w * triangle_view_factor(&x, view, &p)).fold(0.0, Real::max);
+            let mut mu: Real = 0.0;
+            let mut visible = 1.0;
+            for (k, ((view, w), map)) in samples[material].iter().zip(&maps[material]).enumerate() {
+                let mu2 = triangle_view_factor(&x, view, &p);
+                // The lookahead's first sample is now (`lookahead`); its visibility is
+                // reported even when it cannot raise μ.
+                let wanted = k == 0 || w * mu2 > mu;
+                let v = match map {
+                    Some(map) if wanted && mu2 > p.mu_out => map.visible_fraction(&x),
+                    _ => 1.0,
+                };
+                if k == 0 {
+                    visible = v;
+                }
+                mu = mu.max(w * occluded_factor(mu2, v, p.mu_out));
+            }
             let distance_term = match p.min_edge_pixels {
                 Some(px) => pixel_size_min(&centroid, &samples[material], px, p.image_height),
                 None => p.k_dist * now.eye_distance(&centroid),
             };
-            Some(FaceView { mu, size_min: size_min.max(distance_term) })
+            Some(FaceView { mu, size_min: size_min.max(distance_term), visible })
         })
         .collect()
 }
 
-/// Area-weighted mean μ′₃ over the faces with a view (`views` from `face_views`), and how many
-/// of them have their centroid inside / outside the frustum of the camera at time `t`.
+/// The depth images of every camera time a view-dependent cloth samples, one per distinct
+/// (time offset, resolution), built once per call.
+struct DepthMaps {
+    maps: Vec<((Real, usize), DepthMap)>,
+}
+
+impl DepthMaps {
+    fn new(
+        mesh: &Mesh,
+        camera: &Camera,
+        t: Real,
+        dt: Real,
+        params: &[Option<(ViewParams, Real)>],
+        obstacles_at: &dyn Fn(Real) -> Soup,
+    ) -> Self {
+        let mut keys: Vec<(Real, usize)> = Vec::new();
+        for (p, _) in params.iter().flatten().filter(|(p, _)| p.occlusion_pixels > 0) {
+            for (off, _) in lookahead(dt, p) {
+                let key = (occlusion_time(off, dt), p.occlusion_pixels);
+                if !keys.contains(&key) {
+                    keys.push(key);
+                }
+            }
+        }
+        let cloth_tris: Vec<[usize; 3]> = (0..mesh.faces.len()).map(|f| mesh.face_nodes(f)).collect();
+        let cloth_x = mesh.positions();
+        let maps = keys
+            .into_iter()
+            .map(|(off, px)| {
+                let (mut x, mut tris) = (cloth_x.clone(), cloth_tris.clone());
+                let (ox, otris) = obstacles_at(t + off);
+                let base = x.len();
+                x.extend(ox);
+                tris.extend(otris.iter().map(|tri| tri.map(|i| i + base)));
+                ((off, px), DepthMap::new(&x, &tris, &camera.view_at(t + off), px))
+            })
+            .collect();
+        DepthMaps { maps }
+    }
+
+    /// The depth image serving camera time `t + off` (the nearest of `occlusion_time`'s grid).
+    fn get(&self, off: Real, dt: Real, px: usize) -> Option<&DepthMap> {
+        if px == 0 {
+            return None;
+        }
+        let key = (occlusion_time(off, dt), px);
+        self.maps.iter().find(|(k, _)| *k == key).map(|(_, m)| m)
+    }
+}
+
+/// Occlusion changes more slowly than the window is sampled: depth images are made every
+/// `OCCLUSION_STEP` seconds of the window (or every `dt` when that is longer), and each camera
+/// time uses the nearest one.
+const OCCLUSION_STEP: Real = 0.1;
+
+/// The time offset of the depth image that serves camera time offset `off`.
+fn occlusion_time(off: Real, dt: Real) -> Real {
+    let step = OCCLUSION_STEP.max(dt);
+    (off / step).round() * step
+}
+
+/// Area-weighted mean μ′₃ over the faces with a view (`views` from `face_views`), how many of
+/// them have their centroid inside / outside the frustum of the camera at time `t`, and how many
+/// of those inside are mostly hidden (less than half of the face seen).
 pub fn view_summary(mesh: &Mesh, camera: &Camera, t: Real, views: &[Option<FaceView>]) -> ViewFrameStats {
     let now = camera.view_at(t);
     let (mut weighted, mut area) = (0.0, 0.0);
@@ -205,6 +302,9 @@ pub fn view_summary(mesh: &Mesh, camera: &Camera, t: Real, views: &[Option<FaceV
         area += a;
         if now.frustum_distance(&((x[0] + x[1] + x[2]) / 3.0)) <= 0.0 {
             out.view_faces_in_frame += 1;
+            if v.visible < 0.5 {
+                out.view_faces_occluded += 1;
+            }
         } else {
             out.view_faces_out_of_frame += 1;
         }

@@ -99,7 +99,7 @@ mod tests {
     use crate::mesh::rectangle;
 
     fn seen(mesh: &Mesh, mu: Real) -> Vec<Option<FaceView>> {
-        vec![Some(FaceView { mu, size_min: 0.01 }); mesh.faces.len()]
+        vec![Some(FaceView { mu, size_min: 0.01, visible: 1.0 }); mesh.faces.len()]
     }
 
     #[test]

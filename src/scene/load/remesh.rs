@@ -131,6 +131,15 @@ fn view_params(ctx: &Ctx, path: &str, v: Option<&ViewSpec>, sides: (bool, Real))
         }
         p.image_height = h as Real;
     }
+    if let Some(h) = v.occlusion_pixels {
+        if !(0..=4096).contains(&h) {
+            return Err(ctx.err(
+                format!("{path}.occlusion_pixels"),
+                format!("expected an integer 0..=4096 (pixels; 0 turns occlusion off), got {h}"),
+            ));
+        }
+        p.occlusion_pixels = h as usize;
+    }
     check("window", v.window, 0.0, 1e3, false, &mut p.window)?;
     check("hold", v.hold, 0.0, 1e3, false, &mut p.hold)?;
     p.coarsen_time = p.window;
