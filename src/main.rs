@@ -35,7 +35,8 @@ fn main() -> ExitCode {
         Ok(cli) => cli,
         Err(code) => return code,
     };
-    let result: Result<(), CliError> = match cli.command {
+    let threads = cli.command.threads();
+    let result: Result<(), CliError> = cli::on_workers(threads, || match cli.command {
         Command::Simulate(args) => cli::simulate(args),
         Command::Resume(args) => cli::resume_run(args),
         Command::Check { files, base } => cli::check(&files, base.as_deref()),
@@ -46,7 +47,7 @@ fn main() -> ExitCode {
         Command::Crossings(args) => cli::crossings(args),
         Command::Upsample(cmd) => cli::upsample(cmd),
         Command::Convert { conf, out, base } => cli::convert(&conf, &out, base.as_deref()),
-    };
+    });
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

@@ -63,6 +63,20 @@ pub enum Command {
     },
 }
 
+impl Command {
+    /// The worker threads the command asks for (`--threads`); a batch's are per shot (its own
+    /// pools), so none here.
+    pub fn threads(&self) -> Option<u64> {
+        match self {
+            Command::Simulate(a) => a.threads,
+            Command::Resume(a) => a.threads,
+            Command::Compare(a) => a.threads,
+            Command::Upsample(UpsampleCommand::Trace(a)) => a.threads,
+            _ => None,
+        }
+    }
+}
+
 #[derive(clap::Args)]
 pub struct SimulateArgs {
     /// Scene file (JSON).

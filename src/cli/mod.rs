@@ -107,14 +107,26 @@ fn install_interrupt() -> Result<(), CliError> {
     interrupt::install().map_err(|e| CliError::Run(format!("cannot install the SIGTERM/SIGINT handlers: {e}")))
 }
 
-/// Sets the worker thread count of the global pool (`--threads`, else `SLURM_CPUS_PER_TASK`).
-fn set_threads(threads: Option<u64>) -> Result<(), CliError> {
-    let Some(n) = threads.or_else(slurm_cpus) else { return Ok(()) };
+/// Runs a command on a worker of its own thread pool (`--threads`, else `SLURM_CPUS_PER_TASK`,
+/// else every core). The simulation's parallel loops then start from a pool thread: from the
+/// main thread each one is handed to the pool and waited for, a wake-up and a sleep per loop
+/// that cost small meshes a quarter of their run time (ARCSim's square.json, issue 17 item 4).
+/// Worker stacks are as large as a main thread's.
+pub fn on_workers<T>(threads: Option<u64>, run: impl FnOnce() -> Result<T, CliError> + Send) -> Result<T, CliError>
+where
+    T: Send,
+{
+    let n = threads.or_else(slurm_cpus).map_or(0, |n| n as usize);
     rayon::ThreadPoolBuilder::new()
-        .num_threads(n as usize)
-        .build_global()
-        .map_err(|e| CliError::Input(format!("--threads: cannot start {n} threads: {e}")))
+        .num_threads(n)
+        .stack_size(WORKER_STACK)
+        .build()
+        .map_err(|e| CliError::Input(format!("--threads: cannot start {n} threads: {e}")))?
+        .install(run)
 }
+
+/// Stack of each worker thread (bytes): the main thread's usual 8 MiB.
+const WORKER_STACK: usize = 8 << 20;
 
 fn print_warnings(file: &Path, warnings: &[String]) {
     for w in warnings {
@@ -127,7 +139,7 @@ pub fn simulate(args: SimulateArgs) -> Result<(), CliError> {
         scene,
         frames,
         out,
-        threads,
+        threads: _,
         quiet,
         progress,
         force,
@@ -142,7 +154,6 @@ pub fn simulate(args: SimulateArgs) -> Result<(), CliError> {
         jitter,
     } = args;
     let jitter = jitter_seed.map(|seed| Jitter { seed, amplitude: jitter.unwrap_or(Jitter::AMPLITUDE) });
-    set_threads(threads)?;
     // clap admits only RemeshMode::NAMES.
     let mode = mode.as_deref().and_then(RemeshMode::parse);
     let request = ShotRequest { scene: scene.clone(), base, camera, mode, camera_implies_view: true };
@@ -199,7 +210,6 @@ pub fn simulate(args: SimulateArgs) -> Result<(), CliError> {
 }
 
 pub fn resume_run(args: ResumeArgs) -> Result<(), CliError> {
-    set_threads(args.threads)?;
     install_interrupt()?;
     let progress = Progress::new(ProgressMode::choose(args.progress.as_deref(), args.quiet));
     let format = args.format.as_deref().and_then(OutputFormat::parse);
@@ -241,7 +251,6 @@ fn is_camera_file(path: &Path) -> bool {
 }
 
 pub fn compare_modes(args: CompareArgs) -> Result<(), CliError> {
-    set_threads(args.threads)?;
     let (width, height) = parse_size(&args.size)?;
     let request = ShotRequest {
         scene: Some(args.scene.clone()),
@@ -660,7 +669,6 @@ pub fn upsample(cmd: UpsampleCommand) -> Result<(), CliError> {
                 Ok(loaded.scene)
             };
             let (coarse, fine) = (load(&a.coarse)?, load(&a.fine)?);
-            set_threads(a.threads)?;
             let r = crate::upsample::track::trace(coarse, fine, a.test_functions, &a.out).map_err(cli_error)?;
             let worst = r.residual_after.iter().copied().fold(0.0, f64::max);
             let pull = r.residual_before.iter().copied().fold(0.0, f64::max);

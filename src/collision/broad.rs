@@ -3,6 +3,7 @@
 //! when a count changes), searched tree against tree in parallel; results are put in query order,
 //! so the candidate list is the same for any thread count.
 
+use crate::math::PAR_GRAIN;
 use rayon::prelude::*;
 
 use super::bvh::{Aabb, Bvh};
@@ -106,9 +107,10 @@ impl BroadPhase {
         let n = mesh.nodes.len();
         let faces: Vec<[usize; 3]> = (0..mesh.faces.len()).map(|f| mesh.face_nodes(f)).collect();
         let edges: Vec<[usize; 2]> = mesh.edges.iter().map(|e| sorted_edge(e.n[0].idx(), e.n[1].idx())).collect();
-        let face_boxes: Vec<Aabb> = faces.par_iter().map(|f| iv.cloth_box(f)).collect();
-        let edge_boxes: Vec<Aabb> = edges.par_iter().map(|e| iv.cloth_box(e)).collect();
-        let node_boxes: Vec<Aabb> = (0..n).into_par_iter().map(|i| iv.cloth_box(&[i]).inflate(pad)).collect();
+        let face_boxes: Vec<Aabb> = faces.par_iter().with_min_len(PAR_GRAIN).map(|f| iv.cloth_box(f)).collect();
+        let edge_boxes: Vec<Aabb> = edges.par_iter().with_min_len(PAR_GRAIN).map(|e| iv.cloth_box(e)).collect();
+        let node_boxes: Vec<Aabb> =
+            (0..n).into_par_iter().with_min_len(PAR_GRAIN).map(|i| iv.cloth_box(&[i]).inflate(pad)).collect();
         let cf = refit(&mut self.cloth_faces, &face_boxes);
         let ce = refit(&mut self.cloth_edges, &edge_boxes);
         let cn = refit(&mut self.cloth_nodes, &node_boxes);
@@ -119,10 +121,13 @@ impl BroadPhase {
         let mut out: Vec<(Candidate, T)> = Vec::new();
 
         if !obs_tris.is_empty() {
-            let of_boxes: Vec<Aabb> = obs_tris.par_iter().map(|t| iv.obs_box(t)).collect();
-            let oe_boxes: Vec<Aabb> = obs_edges.par_iter().map(|e| iv.obs_box(e)).collect();
-            let on_boxes: Vec<Aabb> =
-                (0..iv.obs1.len()).into_par_iter().map(|k| iv.obs_box(&[k]).inflate(pad)).collect();
+            let of_boxes: Vec<Aabb> = obs_tris.par_iter().with_min_len(PAR_GRAIN).map(|t| iv.obs_box(t)).collect();
+            let oe_boxes: Vec<Aabb> = obs_edges.par_iter().with_min_len(PAR_GRAIN).map(|e| iv.obs_box(e)).collect();
+            let on_boxes: Vec<Aabb> = (0..iv.obs1.len())
+                .into_par_iter()
+                .with_min_len(PAR_GRAIN)
+                .map(|k| iv.obs_box(&[k]).inflate(pad))
+                .collect();
             let of = refit(&mut self.obs_faces, &of_boxes);
             let oe = refit(&mut self.obs_edges, &oe_boxes);
             let on = refit(&mut self.obs_nodes, &on_boxes);

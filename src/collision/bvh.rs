@@ -283,18 +283,20 @@ impl Bvh {
                 break;
             }
         }
-        tasks
-            .into_par_iter()
-            .flat_map_iter(|t| {
-                let (mut out, mut stack) = (Vec::new(), vec![t]);
-                while let Some(t) = stack.pop() {
-                    if !self.expand(other, t, &near, &mut stack) {
-                        self.leaf_pairs(other, t, &leaf, &mut out);
-                    }
+        let descend = |t: Visit| {
+            let (mut out, mut stack) = (Vec::new(), vec![t]);
+            while let Some(t) = stack.pop() {
+                if !self.expand(other, t, &near, &mut stack) {
+                    self.leaf_pairs(other, t, &leaf, &mut out);
                 }
-                out
-            })
-            .collect()
+            }
+            out
+        };
+        // Small trees on the calling thread (`PAR_GRAIN`); the same list, so the same output.
+        match self.order.len() + other.order.len() < 2 * crate::math::PAR_GRAIN {
+            true => tasks.into_iter().flat_map(descend).collect(),
+            false => tasks.into_par_iter().flat_map_iter(descend).collect(),
+        }
     }
 
     /// Pushes the children of visit `t` (none if its nodes are not near); false when `t` is a

@@ -22,6 +22,7 @@
 //! The limits aimed at lie `MARGIN` inside the user's, and the solve stops once every face is
 //! within `STOP` (half of `TOLERANCE`) of the user's limits.
 
+use crate::math::PAR_GRAIN;
 use rayon::prelude::*;
 
 use crate::forces::membrane::{deformation_gradient, MembraneRest};
@@ -225,7 +226,7 @@ impl StrainLimiter {
             })
             .collect();
         let mut evals: Vec<FaceEval> =
-            cons.par_iter().map(|c| eval_face(&c.nodes.map(|n| x[n]), &rest[c.face])).collect();
+            cons.par_iter().with_min_len(PAR_GRAIN).map(|c| eval_face(&c.nodes.map(|n| x[n]), &rest[c.face])).collect();
         // A face far outside its limits (a garment placed in its sewing pose, far from its
         // pattern) is brought in by at most a factor 1 + BUDGET per step, so that one step does
         // not throw its nodes across the cloth; the limits then hold from the step it reaches them.
@@ -242,7 +243,7 @@ impl StrainLimiter {
         }
         let cons = cons;
         let eval_all = |x: &[Vec3]| -> Vec<FaceEval> {
-            cons.par_iter().map(|c| eval_face(&c.nodes.map(|n| x[n]), &rest[c.face])).collect()
+            cons.par_iter().with_min_len(PAR_GRAIN).map(|c| eval_face(&c.nodes.map(|n| x[n]), &rest[c.face])).collect()
         };
         let worst =
             |evals: &[FaceEval]| cons.iter().zip(evals).map(|(c, e)| excess(e.sigma, c.limits)).fold(0.0, Real::max);

@@ -21,6 +21,7 @@ pub enum Projection {
 }
 
 use crate::math::Real;
+use crate::math::PAR_GRAIN;
 use crate::mesh::Mesh;
 use bending::{dihedral_angle, BendingRest};
 use material::Material;
@@ -100,7 +101,7 @@ impl RestState {
             self.membrane.iter_mut().for_each(|m| m.slack = crate::math::Mat2::identity());
             return;
         }
-        self.membrane.par_iter_mut().enumerate().for_each(|(f, m)| {
+        self.membrane.par_iter_mut().enumerate().with_min_len(PAR_GRAIN).for_each(|(f, m)| {
             m.slack = crate::math::Mat2::identity();
             if kappa[f] < 1.0 {
                 let x = mesh.face_nodes(f).map(|n| mesh.nodes[n].x);

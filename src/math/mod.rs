@@ -14,6 +14,12 @@ pub type Vec12 = nalgebra::SVector<Real, 12>;
 pub type Mat9 = nalgebra::SMatrix<Real, 9, 9>;
 pub type Mat12 = nalgebra::SMatrix<Real, 12, 12>;
 
+/// Fewest elements (faces, hinges, nodes) a parallel loop hands to one task. A loop over fewer
+/// runs on the calling thread: waking a pool thread costs tens of microseconds, more than
+/// a small mesh's whole loop (issue 17 item 4). Results do not depend on it (every parallel
+/// loop combines its results in element order).
+pub const PAR_GRAIN: usize = 256;
+
 /// Eigen-decomposition of a symmetric 2×2 matrix: `(λ₀ ≤ λ₁, unit eigenvectors as columns)`.
 /// Closed form, so it is cheap enough to call per face per step.
 pub fn eigen_sym2(m: &Mat2) -> (Vec2, Mat2) {

@@ -33,6 +33,7 @@
 //!   others, but at the smallest step the result is kept (counted in `ccd_cap_hits`): a residual
 //!   contact is a smaller harm to a shot than a stopped run.
 
+use crate::math::PAR_GRAIN;
 use rayon::prelude::*;
 
 use crate::collision::proximity::{contacts_energy, Contact};
@@ -68,8 +69,16 @@ impl Elastic<'_> {
     /// Elastic energy (membrane + bending) at positions `x`; per-element terms in parallel,
     /// summed in element order (deterministic).
     pub fn energy_at(&self, x: &[Vec3]) -> Real {
-        let faces: Vec<Real> = (0..self.mesh.faces.len()).into_par_iter().map(|f| self.face_energy(f, x)).collect();
-        let hinges: Vec<Real> = (0..self.rest.hinges.len()).into_par_iter().map(|k| self.hinge_energy(k, x)).collect();
+        let faces: Vec<Real> = (0..self.mesh.faces.len())
+            .into_par_iter()
+            .with_min_len(PAR_GRAIN)
+            .map(|f| self.face_energy(f, x))
+            .collect();
+        let hinges: Vec<Real> = (0..self.rest.hinges.len())
+            .into_par_iter()
+            .with_min_len(PAR_GRAIN)
+            .map(|k| self.hinge_energy(k, x))
+            .collect();
         faces.iter().sum::<Real>() + hinges.iter().sum::<Real>()
     }
 
@@ -118,6 +127,7 @@ impl Elastic<'_> {
     pub fn max_strain_at(&self, x: &[Vec3]) -> Real {
         (0..self.mesh.faces.len())
             .into_par_iter()
+            .with_min_len(PAR_GRAIN)
             .map(|f| {
                 let xs = self.mesh.face_nodes(f).map(|n| x[n]);
                 max_principal_strain(&deformation_gradient(&xs, &self.rest.membrane[f]))
@@ -183,8 +193,11 @@ fn wind_work(c: &StepContext, x1: &[Vec3], v1: &[Vec3]) -> Real {
         let (force, _) = wind_face(&xs, &vs, wind);
         force.dot(&(vs[0] + vs[1] + vs[2]))
     };
-    let p: Vec<Real> =
-        (0..mesh.faces.len()).into_par_iter().map(|f| power(f, c.x0, &v0).max(power(f, x1, v1)).max(0.0)).collect();
+    let p: Vec<Real> = (0..mesh.faces.len())
+        .into_par_iter()
+        .with_min_len(PAR_GRAIN)
+        .map(|f| power(f, c.x0, &v0).max(power(f, x1, v1)).max(0.0))
+        .collect();
     c.h * p.iter().sum::<Real>()
 }
 

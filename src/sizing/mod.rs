@@ -9,6 +9,7 @@ pub mod tensor_max;
 pub mod view;
 pub mod view_memory;
 
+use crate::math::PAR_GRAIN;
 use rayon::prelude::*;
 
 use crate::forces::edge_angles;
@@ -201,6 +202,7 @@ pub fn face_metrics(
     let normals = mesh.node_normals();
     (0..mesh.faces.len())
         .into_par_iter()
+        .with_min_len(PAR_GRAIN)
         .map(|f| {
             let Some(p) = params.get(mesh.faces[f].material as usize).and_then(Option::as_ref) else {
                 return Mat2::zeros();

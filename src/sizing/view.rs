@@ -15,6 +15,7 @@
 //! geometry is seen from each camera time. Beyond the paper, cloth hidden behind obstacles or
 //! other cloth is coarsened like cloth out of frame (`occlusion`).
 
+use crate::math::PAR_GRAIN;
 use rayon::prelude::*;
 
 use crate::camera::{Camera, View};
@@ -196,6 +197,7 @@ pub fn face_views(
     let now = camera.view_at(t);
     (0..mesh.faces.len())
         .into_par_iter()
+        .with_min_len(PAR_GRAIN)
         .map(|f| {
             let material = mesh.faces[f].material as usize;
             let (p, size_min) = params.get(material).copied().flatten()?;

@@ -16,6 +16,7 @@
 //! pan kept 1.9× finer faces out of frame that way); the smallest is, to within faces whose
 //! every node touches a better-seen face, the face's own last μ.
 
+use crate::math::PAR_GRAIN;
 use rayon::prelude::*;
 
 use crate::math::Real;
@@ -30,7 +31,7 @@ pub fn apply_floor(mesh: &Mesh, views: &mut [Option<FaceView>], memory: &[Real],
     if memory.len() != mesh.nodes.len() {
         return;
     }
-    views.par_iter_mut().enumerate().for_each(|(f, view)| {
+    views.par_iter_mut().enumerate().with_min_len(PAR_GRAIN).for_each(|(f, view)| {
         let Some(view) = view else { return };
         let d = drop.get(mesh.faces[f].material as usize).copied().unwrap_or(Real::INFINITY);
         let ids = mesh.face_nodes(f);

@@ -3,6 +3,7 @@
 //! are bit-identical whatever the thread count. This is the one place where local Hessians are
 //! added into the global matrix.
 
+use crate::math::PAR_GRAIN;
 use rayon::prelude::*;
 
 use crate::collision::friction::FrictionTerm;
@@ -185,10 +186,12 @@ impl ImplicitSystem {
         timing.assemble_s += (t1 - t0).as_secs_f64();
         if refactor {
             let blocks = &self.blocks;
-            self.values.par_iter_mut().zip(self.chol.value_sources().par_iter()).for_each(|(v, &s)| {
-                let b = &blocks[s / 9];
-                *v = b[((s % 9) / 3, s % 3)];
-            });
+            self.values.par_iter_mut().zip(self.chol.value_sources().par_iter()).with_min_len(64 * PAR_GRAIN).for_each(
+                |(v, &s)| {
+                    let b = &blocks[s / 9];
+                    *v = b[((s % 9) / 3, s % 3)];
+                },
+            );
             self.chol.factor(&self.values)?;
             timing.factorisations += 1;
         }
@@ -220,8 +223,11 @@ impl ImplicitSystem {
         let mut energy = 0.0;
         let nf = mesh.faces.len();
         for start in (0..nf).step_by(CHUNK) {
-            let locals: Vec<Local<3, 9>> =
-                (start..(start + CHUNK).min(nf)).into_par_iter().map(|f| face_local(inp, scheme, f)).collect();
+            let locals: Vec<Local<3, 9>> = (start..(start + CHUNK).min(nf))
+                .into_par_iter()
+                .with_min_len(PAR_GRAIN)
+                .map(|f| face_local(inp, scheme, f))
+                .collect();
             for (k, local) in locals.iter().enumerate() {
                 let f = start + k;
                 energy += local.energy;
@@ -230,8 +236,11 @@ impl ImplicitSystem {
         }
         let nh = inp.rest.hinges.len();
         for start in (0..nh).step_by(CHUNK) {
-            let locals: Vec<Local<4, 12>> =
-                (start..(start + CHUNK).min(nh)).into_par_iter().map(|k| hinge_local(inp, scheme, k)).collect();
+            let locals: Vec<Local<4, 12>> = (start..(start + CHUNK).min(nh))
+                .into_par_iter()
+                .with_min_len(PAR_GRAIN)
+                .map(|k| hinge_local(inp, scheme, k))
+                .collect();
             for (j, local) in locals.iter().enumerate() {
                 let k = start + j;
                 energy += local.energy;
