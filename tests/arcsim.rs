@@ -701,3 +701,43 @@ fn sphere_clearance_is_never_negative() {
 fn arcsim_default_base_is_the_conf_grand_parent() {
     assert_eq!(arcsim::default_base(Path::new("x/conf/a.json")), Path::new("x/conf/.."));
 }
+
+/// `Projection::EnergyOnly` (the fault checks' and the pop filter's energies, issue 17 item 3)
+/// gives the energy of the full kernels bit for bit, for every kernel, and no derivatives.
+#[test]
+fn energy_only_is_the_kernels_energy_bit_for_bit() {
+    let knit = MeasuredMaterial::new(&KNIT, 2.0, 1.0);
+    let lin = MembraneStiffness { k11: 1000.0, k12: 200.0, k22: 800.0, k33: 300.0 };
+    let mut rng = Rng(5);
+    let mut rnd = move || rng.uniform() - 0.5;
+    for _ in 0..20 {
+        let f = Mat2::new(1.0 + 0.3 * rnd(), 0.2 * rnd(), 0.2 * rnd(), 1.0 + 0.3 * rnd());
+        let (x, rest) = strained_triangle(f, 0.05 * rnd());
+        let cases = [
+            (membrane(&x, &rest, &lin, Projection::Psd), membrane(&x, &rest, &lin, Projection::EnergyOnly)),
+            (
+                measured_membrane(&x, &rest, &knit.stretching, Projection::Psd),
+                measured_membrane(&x, &rest, &knit.stretching, Projection::EnergyOnly),
+            ),
+        ];
+        for ((e, g, _), (e_only, g_only, h_only)) in cases {
+            assert!(e != 0.0 && g != SVector::<Real, 9>::zeros());
+            assert_eq!(e.to_bits(), e_only.to_bits());
+            assert!(g_only.iter().chain(h_only.iter()).all(|&v| v == 0.0));
+        }
+        let h = hinge(1.5 * rnd());
+        let (brest, hr) = hinge_rest(&h);
+        let cases = [
+            (bending(&h, &brest, 2e-5, Projection::Psd), bending(&h, &brest, 2e-5, Projection::EnergyOnly)),
+            (
+                measured_bending(&h, &brest, &hr, &knit.bending, Projection::Psd),
+                measured_bending(&h, &brest, &hr, &knit.bending, Projection::EnergyOnly),
+            ),
+        ];
+        for ((e, _, _), (e_only, g_only, h_only)) in cases {
+            assert!(e != 0.0);
+            assert_eq!(e.to_bits(), e_only.to_bits());
+            assert!(g_only.iter().chain(h_only.iter()).all(|&v| v == 0.0));
+        }
+    }
+}

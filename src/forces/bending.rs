@@ -79,11 +79,14 @@ pub fn dihedral_hessian(x: &[Vec3; 4]) -> Mat12 {
 pub fn bending(x: &[Vec3; 4], rest: &BendingRest, kb: Real, proj: Projection) -> (Real, Vec12, Mat12) {
     let xv = to_v3(x);
     let theta = unwrap_angle(dihedral_angle(&xv), rest.theta0);
-    let g = dihedral_gradient(&xv);
-    let grad_theta = Vec12::from_fn(|r, _| g[r / 3].0[r % 3]);
     let c = 0.5 * kb * rest.shape;
     let d = theta - rest.theta0;
     let energy = c * d * d;
+    if proj == Projection::EnergyOnly {
+        return (energy, Vec12::zeros(), Mat12::zeros());
+    }
+    let g = dihedral_gradient(&xv);
+    let grad_theta = Vec12::from_fn(|r, _| g[r / 3].0[r % 3]);
     let grad = 2.0 * c * d * grad_theta;
     // Gauss–Newton form 2c ∇θ∇θᵀ is PSD; the exact Hessian adds 2c (θ − θ̄) ∇²θ.
     let mut hess = 2.0 * c * grad_theta * grad_theta.transpose();

@@ -186,9 +186,12 @@ pub fn measured_membrane(
     let c = voigt_stiffness(&k);
     let sigma = c * eps;
     let a = rest.area;
+    let energy = 0.5 * a * eps.dot(&sigma);
+    if proj == Projection::EnergyOnly {
+        return (energy, Vec9::zeros(), crate::math::Mat9::zeros());
+    }
     let b = rest.b();
     let jac = strain_jacobian(&f, &b);
-    let energy = 0.5 * a * eps.dot(&sigma);
     let grad = a * jac.transpose() * sigma;
     let (tangent, s) = match proj {
         Projection::Exact => {
@@ -202,7 +205,7 @@ pub fn measured_membrane(
             }
             (d, Mat2::new(sigma[0], sigma[2], sigma[2], sigma[1]))
         }
-        Projection::Psd => {
+        Projection::Psd | Projection::EnergyOnly => {
             let block = pos_part2(&Mat2::new(k[0], k[1], k[1], k[2]));
             let mut d = Mat3::zeros();
             d.fixed_view_mut::<2, 2>(0, 0).copy_from(&block);
@@ -282,8 +285,6 @@ pub fn measured_bending(
 ) -> (Real, Vec12, Mat12) {
     let xv = x.map(|p| V3([p.x, p.y, p.z]));
     let theta = unwrap_angle(dihedral_angle(&xv), rest.theta0);
-    let g = dihedral_gradient(&xv);
-    let grad_theta = Vec12::from_fn(|r, _| g[r / 3].0[r % 3]);
     let curv = theta.abs() * hinge.curvature_per_angle;
     let (ke, dke_dcurv) = hinge
         .bias
@@ -295,6 +296,11 @@ pub fn measured_bending(
     let shape = rest.shape / 6.0;
     let d = theta - rest.theta0;
     let energy = 0.25 * ke * shape * d * d;
+    if proj == Projection::EnergyOnly {
+        return (energy, Vec12::zeros(), Mat12::zeros());
+    }
+    let g = dihedral_gradient(&xv);
+    let grad_theta = Vec12::from_fn(|r, _| g[r / 3].0[r % 3]);
     let c = 0.5 * ke * shape;
     let grad = c * d * grad_theta;
     let mut hess = c * grad_theta * grad_theta.transpose();

@@ -94,6 +94,9 @@ pub fn membrane(x: &[Vec3; 3], rest: &MembraneRest, k: &MembraneStiffness, proj:
     let s3 = k.k33 * g12;
     let a = rest.area;
     let energy = a * 0.5 * (e11 * s1 + e22 * s2 + g12 * s3);
+    if proj == Projection::EnergyOnly {
+        return (energy, Vec9::zeros(), Mat9::zeros());
+    }
     let b = rest.b();
     let jac = strain_jacobian(&f, &b);
     let sigma = Vec3::new(s1, s2, s3);
@@ -105,7 +108,7 @@ pub fn membrane(x: &[Vec3; 3], rest: &MembraneRest, k: &MembraneStiffness, proj:
     let s = Mat2::new(s1, s3, s3, s2);
     let s = match proj {
         Projection::Exact => s,
-        Projection::Psd => pos_part2(&s),
+        Projection::Psd | Projection::EnergyOnly => pos_part2(&s),
     };
     for i in 0..3 {
         for j in 0..3 {

@@ -18,6 +18,10 @@ pub enum Projection {
     Exact,
     /// A positive semidefinite form, used to assemble the implicit system.
     Psd,
+    /// The energy alone, bit-identical to the other forms' (gradient and Hessian returned as
+    /// zeros): the fault checks and the pop filter's line search evaluate energies only, and
+    /// the derivatives were most of their cost (issue 17 item 3).
+    EnergyOnly,
 }
 
 use crate::math::Real;

@@ -98,12 +98,12 @@ impl Elastic<'_> {
     fn face_energy(&self, f: usize, x: &[Vec3]) -> Real {
         let xs = self.mesh.face_nodes(f).map(|n| x[n]);
         let mat = &self.materials[self.mesh.faces[f].material as usize];
-        mat.stretch(&xs, &self.rest.membrane[f], Projection::Psd).0
+        mat.stretch(&xs, &self.rest.membrane[f], Projection::EnergyOnly).0
     }
 
     fn hinge_energy(&self, k: usize, x: &[Vec3]) -> Real {
         let hg = &self.rest.hinges[k];
-        self.materials[hg.material].bend(&hg.nodes.map(|n| x[n]), hg, Projection::Psd).0
+        self.materials[hg.material].bend(&hg.nodes.map(|n| x[n]), hg, Projection::EnergyOnly).0
     }
 
     /// U(x̃) − U(x₀): the elastic work of moving the handle nodes in `moved` to `xt` with every
