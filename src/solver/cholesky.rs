@@ -9,10 +9,8 @@
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, simplicial, supernodal, CholeskySymbolicParams, LltRef, SymbolicCholesky,
-    SymbolicCholeskyRaw,
+    factorize_symbolic_cholesky, simplicial, supernodal, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
 };
-use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 
@@ -41,19 +39,9 @@ pub struct Cholesky {
 
 impl Cholesky {
     /// Analyses the pattern (fill-reducing AMD ordering, elimination tree, supernodes).
-    ///
-    /// Always the supernodal factorisation: each node's three coordinates form a dense column
-    /// block, so every supernode is at least 3 wide and the dense kernels win even on small
-    /// meshes, where faer's flop-ratio rule picks the scalar simplicial one. Measured on ARCSim's
-    /// square.json (~300 faces, 325 frames, one thread): factorisation 1.74 s → 0.81 s; on
-    /// sphere.json (up to ~2,000 faces, 30 frames) 1.93 s → 1.89 s (issue 17 item 4).
     pub fn analyse(csc: &ScalarCsc) -> Result<Self, SolveError> {
         let sym = SymbolicSparseColMatRef::new_checked(csc.dim, csc.dim, &csc.col_ptr, None, &csc.row_idx);
-        let params = CholeskySymbolicParams {
-            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
-            ..Default::default()
-        };
-        let symbolic = factorize_symbolic_cholesky(sym, Side::Lower, Default::default(), params)
+        let symbolic = factorize_symbolic_cholesky(sym, Side::Lower, Default::default(), Default::default())
             .map_err(|e| SolveError::Symbolic(format!("{e:?}")))?;
         Ok(Self::with_symbolic(csc, symbolic))
     }
