@@ -428,11 +428,17 @@ impl CollisionWorld {
             // `add_impacts`): a zone keeps every impact it has met, including earlier
             // linearisations of the same primitives. Replacing those instead lets the projection
             // satisfy one linearisation at a time and cycle between two until the cap.
+            let known = constraints.len();
             for (nodes, imp) in impacts {
                 let c = ZoneConstraint { nodes, w: imp.w, n: imp.n, delta };
                 if !constraints.contains(&c) {
                     constraints.push(c);
                 }
+            }
+            // Each iteration solves its zones afresh from `target`: with no constraint new it
+            // would repeat the last iteration exactly, and so every one after it, to the cap.
+            if constraints.len() == known {
+                break;
             }
             // Zones: connected components of cloth nodes tied by constraints.
             let mut uf = UnionFind::new(n);
