@@ -98,6 +98,10 @@ fn confs_read_as_arcsim_reads_them() {
     let square = conf("square.json");
     assert_eq!(square.scene.frames, 325);
     assert_eq!(square.scene.collision.thickness, 1e-3, "ARCSim's default repulsion thickness");
+    // ARCSim's cubic penalty K·a·v³/(6τ) and the quadratic ½·k·a·v² store the same energy at
+    // one thickness when k = K/3: ARCSim's default K = 1e9 here, the conf's own 1e6 on sphere.
+    assert_eq!(square.scene.collision.stiffness, 1e9 / 3.0);
+    assert_eq!(s.collision.stiffness, 1e6 / 3.0);
     assert!(square.scene.collision.self_collision, "ARCSim's cloth–cloth contact is on without obstacles too");
     assert!(square.warnings.is_empty(), "{:?}", square.warnings);
 

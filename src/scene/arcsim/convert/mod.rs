@@ -111,6 +111,16 @@ struct Magic {
 /// ARCSim's `magic.handle_stiffness` default (`magic.hpp`).
 const ARCSIM_HANDLE_STIFFNESS: f64 = 1e3;
 
+/// ARCSim's `magic.collision_stiffness` default (`magic.hpp`).
+const ARCSIM_COLLISION_STIFFNESS: f64 = 1e9;
+
+/// ARCSim's repulsion energy is cubic in the depth v inside the thickness τ, K·a·v³/(6τ)
+/// (`constraint.cpp`, `IneqCon::energy`, with a the smaller area of the pair), viewcloth's is
+/// quadratic, ½·k·a·v² (`collision::proximity`). The two store the same energy at one thickness
+/// when k = K/3, so a conf's K becomes the scene's `collision.stiffness` K/3 (ARCSim's default
+/// 1e9 when the conf has none: 3.3e8).
+const ARCSIM_PENALTY_RATIO: f64 = 3.0;
+
 const TOP_KEYS: &[&str] = &[
     "frame_time",
     "frame_steps",
@@ -260,9 +270,8 @@ impl Conv<'_> {
             ("friction", J::Num(obs_friction)),
             ("self_friction", J::Num(friction)),
         ];
-        if let Some(k) = magic.stiffness {
-            collision.insert(1, ("stiffness", J::Num(k)));
-        }
+        let k = magic.stiffness.unwrap_or(ARCSIM_COLLISION_STIFFNESS) / ARCSIM_PENALTY_RATIO;
+        collision.insert(1, ("stiffness", J::Num(k)));
         // ARCSim handles cloth–cloth contact in every scene (its proximity and collision
         // stages; `disable` may switch either off).
         collision.push(("self_collision", J::Bool(true)));
