@@ -32,6 +32,9 @@ pub struct CollisionCounters {
     pub ccd_iterations: usize,
     /// Steps whose impact-zone loop stopped at the iteration cap with collisions left.
     pub cap_hits: usize,
+    /// Nodes the collision projection would have flung past the speed cap at the smallest step
+    /// size, which kept their solved motion instead (`sim::checks`, "Collisions left").
+    pub flung_reverted: usize,
     /// Zones whose projection had no solution.
     pub failed_zones: usize,
     /// Friction contacts sticking and sliding at the accepted solves.

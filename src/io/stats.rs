@@ -127,6 +127,10 @@ pub struct CollisionFrameStats {
     pub ccd_iterations: usize,
     /// Steps whose impact-zone loop hit `collision.max_iterations` with collisions left.
     pub ccd_cap_hits: usize,
+    /// Nodes that kept their solved motion at a step of the smallest size because the collision
+    /// projection flung them past the speed cap (the run would have stopped).
+    #[serde(default)]
+    pub flung_reverted: usize,
     /// Zones whose projection had no solution.
     pub failed_zones: usize,
     /// Cloth nodes deeper than thickness/2 inside an obstacle at the frame end (must be 0).

@@ -31,7 +31,10 @@
 //!   one step (an element torn open by a projection or a solve).
 //! - **Collisions left** at the impact-zone iteration cap (in the step): retried like the
 //!   others, but at the smallest step the result is kept (counted in `ccd_cap_hits`): a residual
-//!   contact is a smaller harm to a shot than a stopped run.
+//!   contact is a smaller harm to a shot than a stopped run. For the same reason, at that
+//!   smallest step a node the projection flung faster than the speed cap keeps its solved
+//!   position and velocity (counted in `flung_reverted`; its collision may be left), instead of
+//!   the run stopping on the speed check.
 
 use crate::math::PAR_GRAIN;
 use rayon::prelude::*;
@@ -239,6 +242,12 @@ pub fn after_solve(c: &StepContext, v: Vec<Vec3>) -> Result<Solved, Fault> {
     Ok(Solved { x: x1, v, kinetic: k1, elastic: u1, floor })
 }
 
+/// The speed no node may exceed after collisions (module doc, "Speed").
+pub fn speed_cap(c: &StepContext, solved: &Solved) -> Real {
+    let v_max_solve = solved.v.iter().map(|v| v.norm()).fold(0.0, Real::max);
+    2.0 * (v_max_solve + c.obstacle_speed) + KICK_THICKNESSES * c.thickness / c.h + 1.0
+}
+
 /// Checks on the end-of-step state `x`, `v` (after collisions): finite, speed cap,
 /// energy against the solved state, strain jump.
 pub fn end_of_step(c: &StepContext, solved: &Solved, x: &[Vec3], v: &[Vec3]) -> Result<(), Fault> {
@@ -246,8 +255,7 @@ pub fn end_of_step(c: &StepContext, solved: &Solved, x: &[Vec3], v: &[Vec3]) -> 
         return Err(Fault::NonFinite);
     }
     let (th, v_obs) = (c.thickness, c.obstacle_speed);
-    let v_max_solve = solved.v.iter().map(|v| v.norm()).fold(0.0, Real::max);
-    let cap = 2.0 * (v_max_solve + v_obs) + KICK_THICKNESSES * th / c.h + 1.0;
+    let cap = speed_cap(c, solved);
     let max = v.iter().map(|v| v.norm()).fold(0.0, Real::max);
     if max > cap {
         return Err(Fault::Speed { max, cap });

@@ -233,6 +233,7 @@ fn frame_stats(sim: &mut Simulation, number: usize, adaptive: bool) -> FrameStat
             impact_zones: c.impact_zones,
             ccd_iterations: c.ccd_iterations,
             ccd_cap_hits: c.cap_hits,
+            flung_reverted: c.flung_reverted,
             failed_zones: c.failed_zones,
             penetrations: sim.penetrations(),
             sticking: c.sticking,

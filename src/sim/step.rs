@@ -156,6 +156,19 @@ impl Simulation {
             if capped && !accept_unresolved {
                 return Err(StepFault::Retry(Fault::Collisions));
             }
+            if accept_unresolved {
+                // The smallest step: a node the projection flung past the speed cap keeps the
+                // solve's motion instead (checks.rs, "Collisions left").
+                let cap = checks::speed_cap(&self.context(&step), &solved);
+                let mut reverted = 0;
+                for i in 0..x.len() {
+                    if v[i].norm() > cap {
+                        (x[i], v[i]) = (solved.x[i], solved.v[i]);
+                        reverted += 1;
+                    }
+                }
+                self.ws.counters.flung_reverted += reverted;
+            }
         }
         self.timed(Stage::FaultChecks, |s| checks::end_of_step(&s.context(&step), &solved, &x, &v))?;
         // The solve's acceleration (before collisions and constraints), as ARCSim keeps it.
