@@ -41,7 +41,8 @@ fn far_side_faces_of_a_thin_obstacle_do_not_push_nodes_through() {
     let n = sim.state.mesh.nodes.len();
     let mesh = sim.state.mesh.clone();
     let h = sim.scene.time_step();
-    let contacts = sim.ws.collisions.as_mut().unwrap().proximity(&mesh, &vec![1e-4; n], h);
+    let contacts =
+        sim.ws.collisions.as_mut().unwrap().proximity(&mesh, &vec![1e-4; n], &vec![5e-5; mesh.faces.len()], h);
     let node_face: Vec<_> = contacts.iter().filter(|c| c.nodes[0] < n && c.nodes[1] >= n && c.w[0] == 1.0).collect();
     assert_eq!(node_face.len(), n, "one contact per node with the plank: {node_face:?}");
     for c in node_face {

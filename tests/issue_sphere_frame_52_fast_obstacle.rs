@@ -37,7 +37,7 @@ fn obstacle_moving_farther_than_the_thickness_in_a_step_still_repels_the_cloth()
     let world = sim.ws.collisions.as_mut().unwrap();
     // The block rises 9 mm over the step: the patch, 1 mm above it, ends 8 mm inside.
     world.obs_x1 = world.obs_x0.iter().map(|p| p + Vec3::new(0.0, 0.0, 0.009)).collect();
-    let contacts = world.proximity(&mesh, &vec![1e-4; n], h);
+    let contacts = world.proximity(&mesh, &vec![1e-4; n], &vec![5e-5; mesh.faces.len()], h);
     let node_face: Vec<_> = contacts.iter().filter(|c| c.nodes[0] < n && c.nodes[1] >= n && c.w[0] == 1.0).collect();
     assert_eq!(node_face.len(), n, "one contact per node with the block: {node_face:?}");
     for c in node_face {

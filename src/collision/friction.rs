@@ -42,6 +42,7 @@
 //! elastic energy that the step's energy check rejected (45% of the steps of the uniform
 //! `sheet_on_sphere` reference), and it takes its normal impulse from the explicit penalty force.
 
+use super::proximity::Law;
 use crate::math::{Mat3, Real, Vec3};
 
 /// κ in the stick damper c = κ m_eff / h.
@@ -101,8 +102,9 @@ pub struct FrictionContact {
     pub w: [Real; 4],
     pub n: Vec3,
     pub thickness: Real,
-    /// Repulsion stiffness k.
+    /// Repulsion stiffness k and law (`proximity::Law`).
     pub stiffness: Real,
+    pub law: Law,
     pub mu: Real,
     /// 1 / Σ wᵢ²/mᵢ over the free nodes.
     m_eff: Real,
@@ -148,8 +150,8 @@ impl FrictionFrame<'_> {
         }
     }
 
-    /// Normal force k·max(0, −g) and tangential relative velocity of `c` at cloth velocities `v`
-    /// (positions x₀ + h v).
+    /// Normal force −E′(g) (k·max(0, −g) for the quadratic law) and tangential relative velocity
+    /// of `c` at cloth velocities `v` (positions x₀ + h v).
     fn kinematics(&self, c: &FrictionContact, v: &[Vec3]) -> (Real, Vec3) {
         let (mut sep, mut vrel) = (Vec3::zeros(), Vec3::zeros());
         for j in 0..4 {
@@ -158,7 +160,7 @@ impl FrictionFrame<'_> {
             vrel += c.w[j] * u;
         }
         let gap = c.n.dot(&sep) - c.thickness;
-        (c.stiffness * (-gap).max(0.0), vrel - c.n * c.n.dot(&vrel))
+        (c.law.eval(c.stiffness, c.thickness, gap).1, vrel - c.n * c.n.dot(&vrel))
     }
 
     /// Stick damper coefficient c of a contact.
@@ -423,6 +425,7 @@ impl FrictionContact {
             n,
             thickness,
             stiffness,
+            law: Law::Quadratic,
             mu,
             m_eff: 0.0,
             coupled: true,
@@ -430,6 +433,11 @@ impl FrictionContact {
             mode: Mode::Stick,
             next_stick: false,
         }
+    }
+
+    /// The same contact with penalty law `law`.
+    pub fn with_law(self, law: Law) -> Self {
+        FrictionContact { law, ..self }
     }
 }
 

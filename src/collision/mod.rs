@@ -3,6 +3,7 @@
 //! resolution, with their parameters (`params`); the exact count of crossing triangle pairs that
 //! checks each written frame (`crossings`).
 
+pub mod areas;
 pub mod broad;
 pub mod bvh;
 pub mod ccd;

@@ -2,6 +2,7 @@
 //! the impact-zone iteration cap, the load-time push-out depth and what becomes of cloth that
 //! starts deeper inside an obstacle.
 
+use super::proximity::Law;
 use crate::math::Real;
 
 /// Collision parameters (scene `collision` block, with defaults).
@@ -11,6 +12,8 @@ pub struct CollisionParams {
     pub thickness: Real,
     /// Repulsion stiffness per unit area (N/m³).
     pub stiffness: Real,
+    /// The repulsion's law and its area rule (scene `collision.penalty`).
+    pub penalty: Law,
     pub friction: Real,
     pub self_friction: Real,
     pub self_collision: bool,
@@ -34,6 +37,7 @@ impl Default for CollisionParams {
         CollisionParams {
             thickness: 5e-3,
             stiffness: 1e6,
+            penalty: Law::Quadratic,
             friction: 0.3,
             self_friction: 0.3,
             self_collision: true,

@@ -1,11 +1,14 @@
 //! Repulsion contacts for the implicit solve (Harmon et al. 2008; Narain et al. 2012, ARCSim's
 //! `proximity`): node–face and edge–edge pairs closer than the collision thickness get a one-sided
-//! quadratic penalty on their gap.
+//! penalty on their gap.
 //!
 //! The weights `w` and normal `n` are frozen at the start of the step, so the gap
-//! g(x) = n · Σ wᵢ xᵢ − thickness is linear in the 12 coordinates and the energy ½ k g² (g < 0)
-//! has the exact, PSD Hessian k (∂g)(∂g)ᵀ with ∂g/∂xᵢ = wᵢ n. Obstacle nodes (infinite mass) are
-//! treated like any other here; callers drop their rows when scattering.
+//! g(x) = n · Σ wᵢ xᵢ − thickness is linear in the 12 coordinates, ∂g/∂xᵢ = wᵢ n, and a penalty
+//! E(g) of the depth d = max(0, −g) has the gradient E′(g) ∂g and the exact, PSD Hessian
+//! E″(g) (∂g)(∂g)ᵀ. Two laws (`Law`): viewcloth's quadratic ½ k d², and ARCSim 0.2.1's cubic
+//! k d³/(6 τ) with τ the thickness (`constraint.cpp`, `IneqCon::energy`), which is soft in
+//! shallow contact and stiffens with depth. Obstacle nodes (infinite mass) are treated like any
+//! other here; callers drop their rows when scattering.
 
 use super::geometry::{any_perpendicular, closest_point_triangle, closest_segments};
 use crate::math::{Mat12, Real, Vec12, Vec3};
@@ -13,6 +16,35 @@ use crate::math::{Mat12, Real, Vec12, Vec3};
 /// Closest-point parameters nearer an end than this belong to the node–face test instead of
 /// edge–edge (ARCSim's `in_wedge` plays the same role), so a pair is not pushed twice.
 const END_TOLERANCE: Real = 1e-6;
+
+/// How a contact's penalty grows with its depth d = max(0, −g) (scene `collision.penalty`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Law {
+    /// E = ½ k d²: viewcloth's, k = stiffness × the largest cloth node area of the pair.
+    #[default]
+    Quadratic,
+    /// E = k d³/(6 τ), τ the thickness: ARCSim 0.2.1's, k = stiffness × the smaller of the two
+    /// elements' areas (`proximity.cpp`, `make_constraint`).
+    Cubic,
+}
+
+impl Law {
+    /// Energy E, normal force −E′(g) ≥ 0 and stiffness E″(g) ≥ 0 of stiffness `k`, thickness
+    /// `thickness`, at gap `g`; zeros at g ≥ 0. Both laws are C¹ at g = 0.
+    pub fn eval(self, k: Real, thickness: Real, g: Real) -> (Real, Real, Real) {
+        let d = (-g).max(0.0);
+        if d == 0.0 {
+            return (0.0, 0.0, 0.0);
+        }
+        match self {
+            Law::Quadratic => (0.5 * k * d * d, k * d, k),
+            Law::Cubic => {
+                let s = k / thickness;
+                (s * d * d * d / 6.0, 0.5 * s * d * d, s * d)
+            }
+        }
+    }
+}
 
 /// A frozen repulsion contact between four nodes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -24,11 +56,18 @@ pub struct Contact {
     /// Unit normal from the second primitive toward the first.
     pub n: Vec3,
     pub thickness: Real,
-    /// Penalty stiffness k (N/m).
+    /// Penalty stiffness k (N/m; for the cubic law, the force at a depth of one thickness is
+    /// k·thickness/2).
     pub stiffness: Real,
+    pub law: Law,
 }
 
 impl Contact {
+    /// `Law::eval` of this contact at gap `g`: energy, normal force and stiffness.
+    pub fn penalty(&self, g: Real) -> (Real, Real, Real) {
+        self.law.eval(self.stiffness, self.thickness, g)
+    }
+
     /// g(x) = n · Σ wᵢ xᵢ − thickness; negative when closer than the thickness.
     pub fn gap(&self, x: &[Vec3; 4]) -> Real {
         let sep: Vec3 = x.iter().zip(&self.w).map(|(x, w)| x * *w).sum();
@@ -41,20 +80,24 @@ impl Contact {
     }
 }
 
-/// Energy ½ k g², gradient k g ∂g and Hessian k ∂g ∂gᵀ when g < 0; zeros otherwise. The energy
-/// is C¹ at g = 0 and the Hessian is exact (not a projection) away from it.
+/// Energy E(g), gradient E′(g) ∂g and Hessian E″(g) ∂g ∂gᵀ when g < 0; zeros otherwise. The
+/// energy is C¹ at g = 0 and the Hessian is exact (not a projection) away from it.
 pub fn repulsion(contact: &Contact, x: &[Vec3; 4]) -> (Real, Vec12, Mat12) {
     let g = contact.gap(x);
     if g >= 0.0 {
         return (0.0, Vec12::zeros(), Mat12::zeros());
     }
-    let k = contact.stiffness;
+    let (e, force, k) = contact.penalty(g);
     let dg = contact.gap_gradient();
     // (∂g ∂gᵀ) k rather than (k ∂g) ∂gᵀ: bitwise symmetric.
-    (0.5 * k * g * g, k * g * dg, dg * dg.transpose() * k)
+    match contact.law {
+        // k g ∂g, bit for bit as before the cubic law.
+        Law::Quadratic => (e, k * g * dg, dg * dg.transpose() * k),
+        Law::Cubic => (e, -force * dg, dg * dg.transpose() * k),
+    }
 }
 
-/// Repulsion energy Σ ½ k g² (g < 0) of frozen `contacts`, cloth at `x` and the fixed points
+/// Repulsion energy Σ E(g) of frozen `contacts`, cloth at `x` and the fixed points
 /// (obstacle vertices) they index past the cloth nodes at `fixed`.
 pub fn contacts_energy(contacts: &[Contact], x: &[Vec3], fixed: &[Vec3]) -> Real {
     let n = x.len();
@@ -76,7 +119,7 @@ pub fn node_face_contact(nodes: [usize; 4], x: &[Vec3; 4], thickness: Real, stif
     }
     let n = cl.normal;
     let w = [1.0, -cl.bary[0], -cl.bary[1], -cl.bary[2]];
-    Some(Contact { nodes, w, n, thickness, stiffness })
+    Some(Contact { nodes, w, n, thickness, stiffness, law: Law::Quadratic })
 }
 
 /// An edge–edge contact when edges `x[0]`–`x[1]` and `x[2]`–`x[3]` are closer than `thickness`
@@ -96,7 +139,7 @@ pub fn edge_edge_contact(nodes: [usize; 4], x: &[Vec3; 4], thickness: Real, stif
     } else {
         ea.cross(&eb).try_normalize(0.0).unwrap_or_else(|| any_perpendicular(&ea))
     };
-    Some(Contact { nodes, w, n, thickness, stiffness })
+    Some(Contact { nodes, w, n, thickness, stiffness, law: Law::Quadratic })
 }
 
 /// An obstacle vertex `x[0]` against a cloth face `x[1..4]`. The cloth belongs outside the
@@ -120,7 +163,7 @@ pub fn obstacle_vertex_contact(
     let face = (x[2] - x[1]).cross(&(x[3] - x[1])).try_normalize(0.0)?;
     let n = if face.dot(outward) > 0.0 { -face } else { face };
     let w = [1.0, -cl.bary[0], -cl.bary[1], -cl.bary[2]];
-    oriented_within(Contact { nodes, w, n, thickness, stiffness }, x, reach)
+    oriented_within(Contact { nodes, w, n, thickness, stiffness, law: Law::Quadratic }, x, reach)
 }
 
 /// A cloth edge `x[0]`–`x[1]` against an obstacle edge `x[2]`–`x[3]` whose outward normal is
@@ -161,7 +204,7 @@ pub fn obstacle_edge_contact(
     let n =
         ea.cross(&eb).try_normalize(1e-12).or_else(|| sep.try_normalize(0.0)).unwrap_or_else(|| any_perpendicular(&ea));
     let n = if n.dot(outward) < 0.0 { -n } else { n };
-    oriented_within(Contact { nodes, w, n, thickness, stiffness }, x, reach)
+    oriented_within(Contact { nodes, w, n, thickness, stiffness, law: Law::Quadratic }, x, reach)
 }
 
 /// `c` if its signed separation n · Σ wᵢ xᵢ lies in (−reach, thickness): closer than the
@@ -186,12 +229,17 @@ mod tests {
     }
 
     /// Central differences of the energy against the gradient and of the gradient against the
-    /// Hessian at ε = 1e-3 … 1e-6 (below |g|, so no kink is crossed): the error must fall like ε² (here it sits at round-off from the
-    /// start, since with frozen w, n the active energy is exactly quadratic).
+    /// Hessian at ε = 1e-3 … 1e-6 (below |g|, so no kink is crossed): the error must fall like
+    /// ε², bounded by the third derivative (zero for the quadratic law, whose errors sit at
+    /// round-off from the start: with frozen w, n its active energy is exactly quadratic).
     fn check_fd(c: &Contact, x: &[Vec3; 4]) {
         let (_, grad, hess) = repulsion(c, x);
         assert!(c.gap(x) < -1e-3, "the test must stay inside the active region");
-        let scale = grad.norm() + hess.norm();
+        let third = match c.law {
+            Law::Quadratic => 0.0,
+            Law::Cubic => c.stiffness / c.thickness * c.gap_gradient().norm().powi(3),
+        };
+        let scale = grad.norm() + hess.norm() + third;
         for eps in [1e-3, 1e-4, 1e-5, 1e-6] {
             let mut eg: Real = 0.0;
             let mut eh: Real = 0.0;
@@ -214,6 +262,26 @@ mod tests {
         let moved = [x[0] + v(0.01, -0.02, -0.001), x[1] + v(0.0, 0.01, 0.002), x[2], x[3] + v(-0.03, 0.0, 0.001)];
         check_fd(&c, &x);
         check_fd(&c, &moved);
+    }
+
+    /// ARCSim's cubic law: energy k d³/(6τ) against its gradient and Hessian by central
+    /// differences, at a node–face and an edge–edge contact; the force at a depth of one
+    /// thickness is k τ / 2, and the law is C¹ at the thickness (no force, no stiffness).
+    #[test]
+    fn cubic_law_gradient_hessian_fd() {
+        let x = [v(0.2, 0.3, 0.004), v(0.0, 0.0, 0.0), v(1.0, 0.0, 0.0), v(0.0, 1.0, 0.0)];
+        let c = Contact { law: Law::Cubic, ..node_face_contact([0, 1, 2, 3], &x, 0.01, 1e3).unwrap() };
+        check_fd(&c, &x);
+        let moved = [x[0] + v(0.01, -0.02, -0.001), x[1] + v(0.0, 0.01, 0.002), x[2], x[3] + v(-0.03, 0.0, 0.001)];
+        check_fd(&c, &moved);
+        let (e, _, _) = repulsion(&c, &x);
+        assert!((e - 1e3 * 0.006f64.powi(3) / (6.0 * 0.01)).abs() < 1e-15, "{e}");
+        let (_, force, k) = c.penalty(-0.01);
+        assert!((force - 1e3 * 0.01 / 2.0).abs() < 1e-12 && (k - 1e3).abs() < 1e-9);
+        assert_eq!(c.penalty(0.0), (0.0, 0.0, 0.0));
+        let xe = [v(-1.0, 0.2, 0.003), v(1.0, 0.3, 0.004), v(0.1, -1.0, -0.002), v(-0.2, 1.0, 0.0)];
+        let ce = Contact { law: Law::Cubic, ..edge_edge_contact([4, 5, 6, 7], &xe, 0.01, 5e2).unwrap() };
+        check_fd(&ce, &xe);
     }
 
     #[test]

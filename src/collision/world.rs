@@ -9,13 +9,16 @@
 
 use std::sync::Mutex;
 
+use super::areas::ElementAreas;
 use super::broad::{BroadPhase, Candidate, Interval, VF};
 use super::ccd::{edge_edge_ccd, vertex_face_ccd, Impact, CCD_TOLERANCE};
 use super::geometry::closest_point_triangle;
 use super::impact_zones::{resolve_zone, ZoneConstraint, ZoneState};
 use super::obstacle::ObstacleBody;
 use super::params::CollisionParams;
-use super::proximity::{edge_edge_contact, node_face_contact, obstacle_edge_contact, obstacle_vertex_contact, Contact};
+use super::proximity::{
+    edge_edge_contact, node_face_contact, obstacle_edge_contact, obstacle_vertex_contact, Contact, Law,
+};
 use super::sdf::MeshSdf;
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
@@ -68,6 +71,8 @@ pub struct CollisionWorld {
     obs_edges: Vec<[usize; 2]>,
     /// Per obstacle edge (same order as `obs_edges`), the third vertex of each adjacent triangle.
     obs_edge_opposite: Vec<Vec<usize>>,
+    /// Per obstacle vertex, the vertices it shares an edge with.
+    obs_neighbours: Vec<Vec<usize>>,
     broad: BroadPhase,
     /// Per body, its signed distance field as of the last query (`with_sdf`); empty until then.
     sdfs: Vec<Mutex<Option<BodySdf>>>,
@@ -96,6 +101,7 @@ impl CollisionWorld {
             obs_normals: Vec::new(),
             obs_edges: Vec::new(),
             obs_edge_opposite: Vec::new(),
+            obs_neighbours: Vec::new(),
             broad: BroadPhase::default(),
             sdfs: Vec::new(),
             exempt: Vec::new(),
@@ -137,8 +143,13 @@ impl CollisionWorld {
                 }
             }
         }
-        (self.obs_tris, self.body_start, self.obs_edges, self.obs_edge_opposite) =
-            (obs_tris, body_start, obs_edges, obs_edge_opposite);
+        let mut obs_neighbours = vec![Vec::new(); body_start[body_start.len() - 1]];
+        for &[a, b] in &obs_edges {
+            obs_neighbours[a].push(b);
+            obs_neighbours[b].push(a);
+        }
+        (self.obs_tris, self.body_start, self.obs_edges, self.obs_edge_opposite, self.obs_neighbours) =
+            (obs_tris, body_start, obs_edges, obs_edge_opposite, obs_neighbours);
     }
 
     /// Vertex positions of the bodies taking part in the current step, at `t`.
@@ -216,8 +227,16 @@ impl CollisionWorld {
     /// contact too, *speculative* while its gap at the start is positive: the step's active set
     /// (`collision::speculative`) switches it on only where the solved motion crosses the
     /// thickness.
-    pub fn proximity(&mut self, mesh: &Mesh, contact_area: &[Real], h: Real) -> Vec<Contact> {
+    ///
+    /// `node_area` and `face_area` are the cloth's material areas; a contact's stiffness is the
+    /// scene's times the largest cloth node area of the pair (quadratic law) or the smaller of
+    /// its two elements' areas (ARCSim's cubic law, `collision::areas`).
+    pub fn proximity(&mut self, mesh: &Mesh, node_area: &[Real], face_area: &[Real], h: Real) -> Vec<Contact> {
+        let contact_area = node_area;
         let th = self.params.thickness;
+        let law = self.params.penalty;
+        let arcsim_areas =
+            (law == Law::Cubic).then(|| ElementAreas::new(mesh, node_area, face_area, &self.obs_tris, &self.obs_x1));
         let n = mesh.nodes.len();
         let x: Vec<Vec3> = mesh.positions();
         let xh: Vec<Vec3> = mesh.nodes.iter().map(|node| node.x + h * node.v).collect();
@@ -248,7 +267,10 @@ impl CollisionWorld {
             let split = if kind == VF { 1 } else { 2 };
             let detect = th + h * (fastest(&nodes[..split]) + fastest(&nodes[split..]));
             let found = match kind {
-                VF if nodes[0] < n && nodes[1] >= n => this.obstacle_face_contact(nodes, &xs, k, reach, detect),
+                VF if nodes[0] < n && nodes[1] >= n => {
+                    let face = [nodes[1] - n, nodes[2] - n, nodes[3] - n];
+                    this.obstacle_face_contact(nodes, face, &xs, k, reach, detect)
+                }
                 VF if nodes[0] >= n => obstacle_vertex_contact(nodes, &xs, detect, k, reach.max(detect), &out),
                 VF => node_face_contact(nodes, &xs, detect, k),
                 _ if nodes[2] >= n => {
@@ -262,7 +284,11 @@ impl CollisionWorld {
             };
             // A contact within the thickness now, or one the start velocities carry within it
             // by the end of the step (speculative).
-            found.map(|c| Contact { thickness: th, ..c }).filter(|c| {
+            let stiffness = |c: &Contact| match &arcsim_areas {
+                Some(areas) => k_area * areas.pair(kind, &nodes),
+                None => c.stiffness,
+            };
+            found.map(|c| Contact { thickness: th, stiffness: stiffness(&c), law, ..c }).filter(|c| {
                 let ph = |i: usize| if i < n { xh[i] } else { this.obs_x1[i - n] };
                 c.gap(&nodes.map(pos)) < 0.0 || c.gap(&nodes.map(ph)) < 0.0
             })
@@ -342,10 +368,13 @@ impl CollisionWorld {
     /// velocities); behind it, within `reach` (thickness plus the obstacle's
     /// travel over the step), and only over the face's interior: a long face's bounding box
     /// reaches far, and a node in front of a slender obstacle (a leg) is also "behind" the faces
-    /// on its far side.
+    /// on its far side. `face` is the face's obstacle vertices (`nodes[1..4]` less the cloth
+    /// node count).
+    #[allow(clippy::too_many_arguments)]
     fn obstacle_face_contact(
         &self,
         nodes: [usize; 4],
+        face: [usize; 3],
         x: &[Vec3; 4],
         k: Real,
         reach: Real,
@@ -365,8 +394,47 @@ impl CollisionWorld {
         if side < 0.0 && !cl.interior && beside > 1e-3 * th {
             return None;
         }
-        let n = if cl.interior || side < 0.0 || cl.dist == 0.0 { outward } else { (x[0] - cl.point) / cl.dist };
-        Some(Contact { nodes, w: [1.0, -cl.bary[0], -cl.bary[1], -cl.bary[2]], n, thickness: th, stiffness: k })
+        let beside_in_front = !cl.interior && side >= 0.0 && cl.dist > 0.0;
+        // In front of the face but beside it (nearest to one of its edges or corners): a contact
+        // only where that edge or corner is the nearest part of the obstacle, in its Voronoi
+        // region. Elsewhere another face is nearer (the node is over its interior), and a
+        // frozen point contact at this face's edge, its normal tilted from the surface's by up
+        // to the angle the edge subtends, resists sliding: with the obstacle's curve ahead, the
+        // node's tangential motion closes its linearised gap, so it switched on as a speculative
+        // contact and pushed the node back (a frictionless strip sliding over a ball at 5 ms
+        // steps moved half as far as it should in 0.4 s). ARCSim takes node–face proximities
+        // over the interior only (`proximity.cpp`, `add_proximity`) and leaves edges and corners
+        // to its edge–edge and vertex–face ones.
+        if beside_in_front && !self.in_feature_region(face, &cl.bary, &x[0]) {
+            return None;
+        }
+        let n = if beside_in_front { (x[0] - cl.point) / cl.dist } else { outward };
+        Some(Contact {
+            nodes,
+            w: [1.0, -cl.bary[0], -cl.bary[1], -cl.bary[2]],
+            n,
+            thickness: th,
+            stiffness: k,
+            law: Law::Quadratic,
+        })
+    }
+
+    /// Whether `p` lies in the Voronoi region of the edge or corner of obstacle face `face`
+    /// (obstacle vertex indices) that its barycentric closest point `bary` lies on: beside every triangle at
+    /// that edge (outside the slabs over their interiors), or behind every edge at that corner.
+    fn in_feature_region(&self, face: [usize; 3], bary: &[Real; 3], p: &Vec3) -> bool {
+        let on: Vec<usize> = (0..3).filter(|&k| bary[k] != 0.0).map(|k| face[k]).collect();
+        let x = &self.obs_x1;
+        match on[..] {
+            [v] => self.obs_neighbours[v].iter().all(|&u| (p - x[v]).dot(&(x[u] - x[v])) <= 0.0),
+            [a, b] => {
+                let e = [a.min(b), a.max(b)];
+                let opposite: &[usize] = self.obs_edges.binary_search(&e).map_or(&[], |i| &self.obs_edge_opposite[i]);
+                let ev = x[e[1]] - x[e[0]];
+                opposite.iter().all(|&o| ev.cross(&(x[o] - x[e[0]])).cross(&ev).dot(&(p - x[e[0]])) <= 0.0)
+            }
+            _ => true,
+        }
     }
 
     /// Continuous collision detection from `x0` to `x1` (cloth), obstacles from `obs_x0` to

@@ -88,6 +88,10 @@ pub struct CollisionSpec {
     /// Repulsion stiffness per unit area (N/m³); a contact's stiffness is this × its area.
     #[serde(default)]
     pub stiffness: Option<f64>,
+    /// `"quadratic"` (default: ½ k a d², a the largest cloth node area of the pair) or
+    /// `"arcsim"` (ARCSim 0.2.1's k a d³/(6 τ), a the smaller of the two elements' areas).
+    #[serde(default)]
+    pub penalty: Option<String>,
     /// Coulomb friction coefficient cloth–obstacle.
     #[serde(default)]
     pub friction: Option<f64>,

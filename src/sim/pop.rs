@@ -106,7 +106,7 @@ impl Simulation {
             Some(world) if !self.scene.disabled.proximity => {
                 // Obstacles still at their current pose for the filter and its sweep.
                 world.advance(t, t);
-                world.proximity(&self.state.mesh, &self.ws.node_area, self.scene.time_step())
+                world.proximity(&self.state.mesh, &self.ws.node_area, &self.ws.face_area, self.scene.time_step())
             }
             Some(world) => {
                 world.advance(t, t);

@@ -42,7 +42,7 @@ fn friction_contacts<'a>(
     contacts.iter().map(move |c| {
         let against_obstacle = c.nodes.iter().any(|&i| i >= n);
         let mu = if against_obstacle { world.params.friction } else { world.params.self_friction };
-        FrictionContact::new(c.nodes, c.w, c.n, c.thickness, c.stiffness, mu)
+        FrictionContact::new(c.nodes, c.w, c.n, c.thickness, c.stiffness, mu).with_law(c.law)
     })
 }
 
@@ -208,7 +208,7 @@ impl Simulation {
     fn proximity(&mut self, t1: Real) -> Vec<Contact> {
         let Some(world) = &mut self.ws.collisions else { return Vec::new() };
         world.advance(self.state.time, t1);
-        let contacts = world.proximity(&self.state.mesh, &self.ws.node_area, t1 - self.state.time);
+        let contacts = world.proximity(&self.state.mesh, &self.ws.node_area, &self.ws.face_area, t1 - self.state.time);
         self.ws.counters.contacts += contacts.len();
         contacts
     }
@@ -247,7 +247,7 @@ impl Simulation {
             }
             _ => Friction { contacts: Vec::new(), pending: 0 },
         };
-        let mut speculative = Speculative::new(contacts, &frame);
+        let mut speculative = Speculative::new(contacts, &frame, self.state.separating);
         let mut friction_s = clock.elapsed().as_secs_f64();
         let input = StepInput {
             mesh: &self.state.mesh,
@@ -258,7 +258,9 @@ impl Simulation {
             wind: self.scene.wind.as_ref(),
             pinned,
             springs,
-            contacts,
+            // The repulsion contacts enter through their active set (`collision::speculative`),
+            // not the assembly: a contact the step carries out of the thickness must let go.
+            contacts: &[],
             fixed,
         };
         let fatal = |source| match source {

@@ -35,6 +35,8 @@ pub struct Workspace {
     pub collisions: Option<CollisionWorld>,
     /// Per node: a third of the adjacent faces' material area (m²), scaling contact stiffness.
     pub node_area: Vec<Real>,
+    /// Per face: its material area (m²), for ARCSim's contact stiffness (`collision::areas`).
+    pub face_area: Vec<Real>,
     /// Per-frame tallies, taken by the run for stats.json.
     pub timers: StageTimers,
     pub counters: CollisionCounters,
@@ -66,6 +68,7 @@ impl Workspace {
         });
         Ok(Workspace {
             node_area: node_areas(&state.mesh, &rest),
+            face_area: rest.membrane.iter().map(|m| m.area).collect(),
             rest,
             system,
             pending_pattern: None,
@@ -87,6 +90,7 @@ impl Workspace {
         self.rest =
             rest_state(state, materials).map_err(|f| SimError::Mesh(format!("remeshing left face {f} degenerate")))?;
         self.node_area = node_areas(&state.mesh, &self.rest);
+        self.face_area = self.rest.membrane.iter().map(|m| m.area).collect();
         self.pending_pattern = Some(BlockPattern::new(&state.mesh, &self.rest.hinges, &state.extra_pairs));
         Ok(())
     }

@@ -8,6 +8,7 @@ use super::spec::{ClothSpec, CollisionSpec, KeyframeSpec, MotSpec, SceneSpec, Tr
 use super::{Cloth, Disabled, Scene};
 use crate::camera::Camera;
 use crate::collision::params::{CollisionParams, InitialIntersections};
+use crate::collision::proximity::Law;
 use crate::error::InputError;
 use crate::forces::wind::Wind;
 use crate::io::obj::{read_obj, ObjData};
@@ -263,6 +264,17 @@ fn collision_params(ctx: &Ctx, spec: Option<&CollisionSpec>) -> Res<CollisionPar
     }
     if let Some(k) = c.stiffness {
         p.stiffness = positive(ctx, "collision.stiffness", k)?;
+    }
+    if let Some(law) = &c.penalty {
+        p.penalty = match law.as_str() {
+            "quadratic" => Law::Quadratic,
+            "arcsim" => Law::Cubic,
+            other => {
+                return Err(
+                    ctx.err("collision.penalty", format!("expected \"quadratic\" or \"arcsim\", got \"{other}\""))
+                )
+            }
+        };
     }
     if let Some(m) = c.friction {
         p.friction = non_negative(ctx, "collision.friction", m)?;
