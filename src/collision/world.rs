@@ -232,7 +232,6 @@ impl CollisionWorld {
     /// scene's times the largest cloth node area of the pair (quadratic law) or the smaller of
     /// its two elements' areas (ARCSim's cubic law, `collision::areas`).
     pub fn proximity(&mut self, mesh: &Mesh, node_area: &[Real], face_area: &[Real], h: Real) -> Vec<Contact> {
-        let contact_area = node_area;
         let th = self.params.thickness;
         let law = self.params.penalty;
         let arcsim_areas =
@@ -256,7 +255,7 @@ impl CollisionWorld {
                 return None;
             }
             let xs = nodes.map(pos);
-            let area = nodes.iter().filter(|&&i| i < n).map(|&i| contact_area[i]).fold(0.0, Real::max);
+            let area = nodes.iter().filter(|&&i| i < n).map(|&i| node_area[i]).fold(0.0, Real::max);
             let k = k_area * area;
             let obstacle = || nodes.iter().filter(|&&i| i >= n).map(|&i| i - n);
             let reach = th + obstacle().map(|i| travel[i]).fold(0.0, Real::max);
