@@ -299,6 +299,9 @@ impl ImplicitSystem {
 
     /// Repulsion contacts enter like elastic elements (without damping):
     /// A += h² K_c, b += h (−∇E_c − h K_c v) over the cloth nodes; fixed points are constant.
+    /// Only the pop filter's static solve passes contacts here; the implicit step passes none
+    /// and adds its contacts through their active set (`collision::speculative`), so that a
+    /// contact the step carries out of the thickness lets go.
     ///
     /// A contact coupling cloth nodes whose blocks are not all in the pattern (the simulation
     /// adds them at the next frame start, not mid-frame, to keep one symbolic analysis per
