@@ -243,8 +243,9 @@ impl Friction {
     /// the sorted participants of the contacts that stuck at the previous step.
     ///
     /// `coupled(nodes)` says whether the system's pattern has the blocks between a contact's
-    /// cloth nodes. One that has not (a cloth–cloth pair new in this frame: the pattern grows at
-    /// frame starts) could only enter a damper as a diagonal majorizer, which moves a node of
+    /// cloth nodes (the step analyses every contact's couplings before it solves,
+    /// `Workspace::pattern_for_step`, so this is a guard). One that has not could only enter a
+    /// damper as a diagonal majorizer, which moves a node of
     /// weight w by about 1/w of the relative velocity it stops; such a contact slides, with its
     /// force capped by what stops its start velocity within the step (m_eff |v_t| / h).
     pub fn new(

@@ -106,10 +106,6 @@ impl Simulation {
             self.ws.remesh_stats.flips += s.flips;
             self.ws.remesh_stats.collapses += s.collapses;
         }
-        let clock = Instant::now();
-        if self.ws.pattern_at_frame_start(&self.state)? {
-            self.ws.timers.since(Stage::Factorisation, clock);
-        }
         self.state.frame += 1;
         Ok(())
     }

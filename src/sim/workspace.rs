@@ -95,12 +95,15 @@ impl Workspace {
         Ok(())
     }
 
-    /// Analyses a remeshed cloth's pending pattern, extended by this step's missing cloth–cloth
-    /// contact couplings. Otherwise the pattern stays fixed within the frame: a missing
-    /// coupling is only recorded in `extra_pairs` (assembly majorizes that contact on the
-    /// diagonal) and enters at the next frame start (`pattern_at_frame_start`), because in a
-    /// scene with self contact new pairs appear at most steps and each analysis is a
-    /// fill-reducing ordering and a symbolic factorisation.
+    /// Analyses a remeshed cloth's pending pattern, and the pattern extended by this step's
+    /// cloth–cloth contact couplings whenever a contact misses one (recorded in `extra_pairs`,
+    /// kept until the next remesh). A contact whose coupling is missing could only enter the
+    /// system as a diagonal majorizer (`assembly`), which resists the two sides' common motion
+    /// and stops only 1/m of their relative motion (m its cloth nodes): on the uniform
+    /// `sheet_on_sphere` reference, layers folding onto each other at 2.7 m/s were slowed to
+    /// 1.6 m/s and ended through each other's thickness, 0.17 J of contact energy no work
+    /// paid for, and 11 of 331 steps were retried; analysed at once, none (the analysis, a
+    /// fill-reducing ordering and a symbolic factorisation, cost less than the retries).
     pub fn pattern_for_step(&mut self, state: &mut SimState, contacts: &[Contact]) -> Result<(), SimError> {
         let n = state.mesh.nodes.len();
         let pattern = self.pending_pattern.as_ref().unwrap_or(&self.system.pattern);
@@ -119,27 +122,12 @@ impl Workspace {
             state.extra_pairs.extend(missing);
             state.extra_pairs.sort_unstable();
             state.extra_pairs.dedup();
-            if self.pending_pattern.is_some() {
-                self.pending_pattern = Some(BlockPattern::new(&state.mesh, &self.rest.hinges, &state.extra_pairs));
-            }
+            self.pending_pattern = Some(BlockPattern::new(&state.mesh, &self.rest.hinges, &state.extra_pairs));
         }
         match self.pending_pattern.take() {
             Some(pattern) => self.analyse(pattern, state),
             None => Ok(()),
         }
-    }
-
-    /// At a frame start without a remesh: analyses the pattern with the contact couplings
-    /// recorded during the previous frame. Done here rather than at the next step so that the
-    /// system at a frame boundary is the one a checkpoint rebuilds from `extra_pairs`. Returns
-    /// whether it analysed.
-    pub fn pattern_at_frame_start(&mut self, state: &SimState) -> Result<bool, SimError> {
-        let pattern = &self.system.pattern;
-        if self.pending_pattern.is_some() || state.extra_pairs.iter().all(|&(i, j)| pattern.block(i, j).is_some()) {
-            return Ok(false);
-        }
-        self.analyse(BlockPattern::new(&state.mesh, &self.rest.hinges, &state.extra_pairs), state)?;
-        Ok(true)
     }
 
     /// A new implicit system over `pattern`: fill-reducing ordering and symbolic factorisation.

@@ -303,9 +303,9 @@ impl ImplicitSystem {
     /// and adds its contacts through their active set (`collision::speculative`), so that a
     /// contact the step carries out of the thickness lets go.
     ///
-    /// A contact coupling cloth nodes whose blocks are not all in the pattern (the simulation
-    /// adds them at the next frame start, not mid-frame, to keep one symbolic analysis per
-    /// frame) keeps its exact right-hand side, but its matrix enters on the diagonal only, as
+    /// A contact coupling cloth nodes whose blocks are not all in the pattern (a guard: the
+    /// pop filter analyses the pattern for its contacts first, `Workspace::pattern_for_step`)
+    /// keeps its exact right-hand side, but its matrix enters on the diagonal only, as
     /// a majorizer: K_c = k (w wᵀ) ⊗ (n nᵀ) and, for the m cloth nodes of the contact,
     /// (Σᵢ wᵢ xᵢ·n)² ≤ m Σᵢ wᵢ² (xᵢ·n)² (Cauchy–Schwarz), so m · blockdiag(K_c) ⪰ K_c: the
     /// system stays SPD and the step is at least as stiff as with the full block.
