@@ -108,11 +108,6 @@ pub struct FrictionContact {
     pub mu: Real,
     /// 1 / Σ wᵢ²/mᵢ over the free nodes.
     m_eff: Real,
-    /// Whether the system's pattern couples its cloth nodes; an uncoupled contact never sticks
-    /// (`Friction::new`).
-    coupled: bool,
-    /// The kinetic force of an uncoupled contact is at most m_eff |v_t(start)| / h.
-    cap: Real,
     pub mode: Mode,
     /// Whether Coulomb's law, at the last update, says it sticks.
     next_stick: bool,
@@ -169,11 +164,11 @@ impl FrictionFrame<'_> {
     }
 
     /// A sliding mode of `c` with tangential relative velocity `vt` and force `force`, its
-    /// Jacobian P taken now (none for an uncoupled contact; its coefficient at most m_eff / h).
+    /// Jacobian P taken now (its coefficient at most m_eff / h).
     fn slide(&self, c: &FrictionContact, vt: Vec3, force: Real) -> Slide {
         let speed = vt.norm();
         let t = if speed > 0.0 { vt / speed } else { Vec3::zeros() };
-        let p = match c.coupled && speed > 0.0 {
+        let p = match speed > 0.0 {
             true => {
                 let across = Mat3::identity() - c.n * c.n.transpose() - t * t.transpose();
                 (force / speed).min(c.m_eff / self.h) * across
@@ -242,16 +237,11 @@ impl Friction {
     /// free cloth node are left out. Modes start at the first guess (module doc) from `stuck`,
     /// the sorted participants of the contacts that stuck at the previous step.
     ///
-    /// `coupled(nodes)` says whether the system's pattern has the blocks between a contact's
-    /// cloth nodes (the step analyses every contact's couplings before it solves,
-    /// `Workspace::pattern_for_step`, so this is a guard). One that has not could only enter a
-    /// damper as a diagonal majorizer, which moves a node of
-    /// weight w by about 1/w of the relative velocity it stops; such a contact slides, with its
-    /// force capped by what stops its start velocity within the step (m_eff |v_t| / h).
+    /// The system's pattern couples every contact's cloth nodes (the step analyses them before it
+    /// solves, `Workspace::pattern_for_step`), so a sticking contact's damper enters whole.
     pub fn new(
         contacts: impl Iterator<Item = FrictionContact>,
         frame: &FrictionFrame,
-        coupled: impl Fn(&[usize; 4]) -> bool,
         stuck: &[[usize; 4]],
     ) -> Friction {
         let n = frame.x0.len();
@@ -264,17 +254,15 @@ impl Friction {
                     return None;
                 }
                 c.m_eff = 1.0 / w2m;
-                c.coupled = coupled(&c.nodes);
                 let (fn0, vt) = frame.kinematics(&c, frame.v0);
                 let speed = vt.norm();
-                c.cap = if c.coupled { Real::INFINITY } else { c.m_eff * speed / frame.h };
                 // Stuck at the previous step, or slow enough for μ f_n to stop within the step
                 // (a contact new at this step: sliding at a force that stops it several times
                 // over would reverse it).
                 let guess = stuck.binary_search(&c.nodes).is_ok() || speed <= c.mu * fn0 * frame.h / c.m_eff;
-                c.mode = match c.coupled && guess {
+                c.mode = match guess {
                     true => Mode::Stick,
-                    false => Mode::Slide(frame.slide(&c, vt, (c.mu * fn0).min(c.cap))),
+                    false => Mode::Slide(frame.slide(&c, vt, c.mu * fn0)),
                 };
                 c.next_stick = c.mode == Mode::Stick;
                 Some(c)
@@ -318,7 +306,7 @@ impl Friction {
             .iter()
             .map(|c| {
                 let (fn1, vt) = frame.kinematics(c, v);
-                let (bound, speed) = ((c.mu * fn1).min(c.cap), vt.norm());
+                let (bound, speed) = (c.mu * fn1, vt.norm());
                 let stick = match c.mode {
                     Mode::Stick => frame.stick_coefficient(c) * speed <= bound * (1.0 + slack.max(SLIDE_TOLERANCE)),
                     Mode::Slide(s) => {
@@ -329,7 +317,7 @@ impl Friction {
                         let (along, reach) = (vt.dot(&s.t), s.force * frame.h / c.m_eff);
                         let reversed = along <= -slack * reach && -along <= reach;
                         let creeping = frame.stick_coefficient(c) * speed < bound * (1.0 - slack);
-                        c.coupled && bound > 0.0 && (reversed || creeping)
+                        bound > 0.0 && (reversed || creeping)
                     }
                 };
                 (bound, vt, stick)
@@ -368,7 +356,7 @@ impl Friction {
                     // the solved speed alone would cap a loaded contact at its load (a sheet on
                     // an incline then slides at one step's load, g_t h, for ever, its friction
                     // exactly balancing gravity instead of decelerating it to a stop).
-                    let t1 = if speed > 0.0 && c.coupled { vt / speed } else { s.t };
+                    let t1 = if speed > 0.0 { vt / speed } else { s.t };
                     let met = (vt + s.t * (s.force * frame.h / c.m_eff)).norm();
                     let force = bound.min(c.m_eff * met / frame.h);
                     let delta = (force * t1 - s.force * s.t).norm();
@@ -429,8 +417,6 @@ impl FrictionContact {
             law: Law::Quadratic,
             mu,
             m_eff: 0.0,
-            coupled: true,
-            cap: 0.0,
             mode: Mode::Stick,
             next_stick: false,
         }
@@ -454,7 +440,7 @@ mod tests {
         let fixed_v = [fixed_v];
         let frame = FrictionFrame::one_node(&x0, &v0, &fixed_v);
         let c = FrictionContact::new([0, 1, 0, 0], [1.0, -1.0, 0.0, 0.0], Vec3::z(), 2e-3, 1000.0, mu);
-        (Friction::new(std::iter::once(c), &frame, |_| true, &[]), x0, v0)
+        (Friction::new(std::iter::once(c), &frame, &[]), x0, v0)
     }
 
     #[test]
@@ -477,7 +463,7 @@ mod tests {
         let frame =
             FrictionFrame { h: 0.01, x0: &x0, v0: &x0, inv_mass: &[0.0], fixed_x: &[Vec3::zeros()], fixed_v: &x0 };
         let c = FrictionContact::new([0, 1, 0, 0], [1.0, -1.0, 0.0, 0.0], Vec3::z(), 2e-3, 1000.0, 0.5);
-        assert!(Friction::new(std::iter::once(c), &frame, |_| true, &[]).is_empty());
+        assert!(Friction::new(std::iter::once(c), &frame, &[]).is_empty());
     }
 
     #[test]
@@ -521,7 +507,7 @@ mod tests {
             let fixed_v = [fixed_v];
             let frame = FrictionFrame::one_node(&x0, &v, &fixed_v);
             let c = FrictionContact::new([0, 1, 0, 0], [1.0, -1.0, 0.0, 0.0], Vec3::z(), 2e-3, 1000.0, 0.5);
-            let f = Friction::new(std::iter::once(c), &frame, |_| true, &[]);
+            let f = Friction::new(std::iter::once(c), &frame, &[]);
             assert_eq!(f.drag_work(&frame, &v) > 0.0, positive);
         }
     }

@@ -232,14 +232,7 @@ impl Simulation {
         let clock = Instant::now();
         let mut friction = match world {
             Some(w) if !contacts.is_empty() => {
-                let system = &self.ws.system;
-                let stuck = &self.state.stuck;
-                Friction::new(
-                    friction_contacts(contacts, nodes.len(), w),
-                    &frame,
-                    |c| system.couples(c, nodes.len()),
-                    stuck,
-                )
+                Friction::new(friction_contacts(contacts, nodes.len(), w), &frame, &self.state.stuck)
             }
             _ => Friction { contacts: Vec::new(), pending: 0 },
         };

@@ -383,11 +383,6 @@ impl ImplicitSystem {
         }
     }
 
-    /// Whether the pattern has every block between the cloth nodes (below `n`) of `nodes`.
-    pub fn couples(&self, nodes: &[usize; 4], n: usize) -> bool {
-        self.contact_slots(nodes, n).iter().all(|&s| s != MISSING)
-    }
-
     /// Block index of each lower-triangle cloth–cloth coupling (a, b) of a contact; `NONE` for
     /// a fixed point or the upper triangle, `MISSING` for a coupling not in the pattern.
     fn contact_slots(&self, nodes: &[usize; 4], n: usize) -> [usize; 16] {
