@@ -1,6 +1,6 @@
 //! Obstacles and collisions: obstacle descriptions (`shape`) and the bodies meshed from them
 //! (`obstacle`), broad phase, proximity repulsion, continuous collision detection and impact-zone
-//! resolution, with their parameters (`params`); the exact count of crossing triangle pairs that
+//! resolution (with rigid zones as its last resort), with their parameters (`params`); the exact count of crossing triangle pairs that
 //! checks each written frame (`crossings`).
 
 pub mod areas;
@@ -14,6 +14,7 @@ pub mod impact_zones;
 pub mod obstacle;
 pub mod params;
 pub mod proximity;
+pub mod rigid_zone;
 pub mod sdf;
 pub mod shape;
 pub mod speculative;

@@ -14,6 +14,7 @@ use super::broad::{BroadPhase, Candidate, Interval, VF};
 use super::ccd::{edge_edge_ccd, vertex_face_ccd, Impact, CCD_TOLERANCE};
 use super::geometry::closest_point_triangle;
 use super::impact_zones::{resolve_zone, ZoneConstraint, ZoneState};
+use super::rigid_zone::resolve_zone_rigid;
 use super::obstacle::ObstacleBody;
 use super::params::CollisionParams;
 use super::proximity::{
@@ -38,8 +39,10 @@ pub struct CollisionCounters {
     /// Nodes the collision projection would have flung past the speed cap at the smallest step
     /// size, which kept their solved motion instead (`sim::checks`, "Collisions left").
     pub flung_reverted: usize,
-    /// Zones whose projection had no solution.
+    /// Zones whose projection had no solution (rigid zones included).
     pub failed_zones: usize,
+    /// Zones that became rigid at the smallest step (`CollisionWorld::resolve`).
+    pub rigid_zones: usize,
     /// Friction contacts sticking and sliding at the accepted solves.
     pub sticking: usize,
     pub sliding: usize,
@@ -469,18 +472,26 @@ impl CollisionWorld {
 
     /// Makes the end-of-step cloth positions `x` collision-free relative to `x0` by iterated CCD
     /// and impact-zone projection. `inv_mass` is 0 for pinned nodes.
+    ///
+    /// With `rigid_beyond` (the last, smallest retry of a step), a zone whose projection has no
+    /// solution, or moves one of its nodes farther than `rigid_beyond` from its start, becomes
+    /// a rigid impact zone (`rigid_zone.rs`) and stays one while the loop runs: every zone it
+    /// later merges into moves rigidly too (Bridson et al. 2002, §7.4).
     pub fn resolve(
         &mut self,
         mesh: &Mesh,
         x0: &[Vec3],
         x: &mut [Vec3],
         inv_mass: &[Real],
+        rigid_beyond: Option<Real>,
         counters: &mut CollisionCounters,
     ) {
         let n = mesh.nodes.len();
         let delta = ZONE_SEPARATION * self.params.thickness;
         let target: Vec<Vec3> = x.to_vec();
         let mut constraints: Vec<ZoneConstraint> = Vec::new();
+        let mut rigid = vec![false; n];
+        let mut rigid_grew = false;
         // Handles win over collisions: an impact whose moving side is all pinned cloth (a handle
         // driven into an obstacle) has no solution, and would otherwise be met again on every
         // iteration until the cap.
@@ -507,7 +518,7 @@ impl CollisionWorld {
             }
             // Each iteration solves its zones afresh from `target`: with no constraint new it
             // would repeat the last iteration exactly, and so every one after it, to the cap.
-            if constraints.len() == known {
+            if constraints.len() == known && !std::mem::take(&mut rigid_grew) {
                 break;
             }
             // Zones: connected components of cloth nodes tied by constraints.
@@ -538,7 +549,31 @@ impl CollisionWorld {
                     eprintln!("zone: {} constraints, {} nodes", cons.len(), zone_nodes.len());
                 }
                 let mut state = ZoneState { x, inv_mass, fixed: &self.obs_x1 };
-                if resolve_zone(&mut state, &cons, 1e-12).is_err() {
+                let free: Vec<usize> = zone_nodes.iter().copied().filter(|&i| inv_mass[i] > 0.0).collect();
+                let projected = match rigid_beyond {
+                    Some(_) if free.iter().any(|&i| rigid[i]) => false,
+                    Some(limit) => {
+                        resolve_zone(&mut state, &cons, 1e-12).is_ok()
+                            && free.iter().all(|&i| (state.x[i] - x0[i]).norm() <= limit)
+                    }
+                    None => resolve_zone(&mut state, &cons, 1e-12).is_ok(),
+                };
+                if projected {
+                    continue;
+                }
+                if rigid_beyond.is_none() {
+                    counters.failed_zones += 1;
+                    continue;
+                }
+                if !free.iter().all(|&i| rigid[i]) {
+                    free.iter().for_each(|&i| rigid[i] = true);
+                    rigid_grew = true;
+                    counters.rigid_zones += 1;
+                }
+                for &i in &free {
+                    state.x[i] = target[i];
+                }
+                if resolve_zone_rigid(&mut state, x0, &free, &cons, 1e-12).is_err() {
                     counters.failed_zones += 1;
                 }
             }

@@ -131,8 +131,12 @@ pub struct CollisionFrameStats {
     /// projection flung them past the speed cap (the run would have stopped).
     #[serde(default)]
     pub flung_reverted: usize,
-    /// Zones whose projection had no solution.
+    /// Zones whose projection had no solution (rigid zones that had none included).
     pub failed_zones: usize,
+    /// Impact zones that moved rigidly at a step of the smallest size because their projection
+    /// had no solution or flung a node past the speed cap.
+    #[serde(default)]
+    pub rigid_zones: usize,
     /// Cloth nodes deeper than thickness/2 inside an obstacle at the frame end (must be 0).
     pub penetrations: usize,
     /// Friction contacts sticking and sliding at the accepted solves (summed over the steps).

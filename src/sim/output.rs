@@ -235,6 +235,7 @@ fn frame_stats(sim: &mut Simulation, number: usize, adaptive: bool) -> FrameStat
             ccd_cap_hits: c.cap_hits,
             flung_reverted: c.flung_reverted,
             failed_zones: c.failed_zones,
+            rigid_zones: c.rigid_zones,
             penetrations: sim.penetrations(),
             sticking: c.sticking,
             sliding: c.sliding,

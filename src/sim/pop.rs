@@ -226,7 +226,7 @@ impl Simulation {
         let mesh = &self.state.mesh;
         let inv_mass = inverse_masses(&mesh.nodes, pinned);
         let mut x = mesh.positions();
-        world.resolve(mesh, x0, &mut x, &inv_mass, &mut self.ws.counters);
+        world.resolve(mesh, x0, &mut x, &inv_mass, None, &mut self.ws.counters);
         for (node, p) in self.state.mesh.nodes.iter_mut().zip(x) {
             node.x = p;
         }

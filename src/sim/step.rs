@@ -148,14 +148,16 @@ impl Simulation {
         let mut x = self.timed(Stage::Integration, |s| s.end_positions(&step, &v));
         self.constrain(&step.x0, &step.held_inv_mass, step.h, &mut x, &mut v);
         if self.ws.collisions.is_some() && !self.scene.disabled.collision {
-            let capped = self.timed(Stage::Collision, |s| s.resolve_collisions(&step, &mut x, &mut v));
+            // The smallest step: zones without a projection, or whose projection would fling a
+            // node past the speed cap, move rigidly instead (checks.rs, "Collisions left").
+            let cap = checks::speed_cap(&self.context(&step), &solved);
+            let rigid_beyond = accept_unresolved.then_some(cap * step.h);
+            let capped = self.timed(Stage::Collision, |s| s.resolve_collisions(&step, &mut x, &mut v, rigid_beyond));
             if capped && !accept_unresolved {
                 return Err(StepFault::Retry(Fault::Collisions));
             }
             if accept_unresolved {
-                // The smallest step: a node the projection flung past the speed cap keeps the
-                // solve's motion instead (checks.rs, "Collisions left").
-                let cap = checks::speed_cap(&self.context(&step), &solved);
+                // A node still flung past the cap keeps the solve's motion.
                 let mut reverted = 0;
                 for i in 0..x.len() {
                     if v[i].norm() > cap {
@@ -392,11 +394,17 @@ impl Simulation {
     /// Makes the end positions collision-free (CCD and impact zones); nodes the projection moved
     /// get the velocity of their new motion. Returns whether the iteration cap was hit with
     /// collisions left.
-    fn resolve_collisions(&mut self, step: &StepData, x: &mut [Vec3], v: &mut [Vec3]) -> bool {
+    fn resolve_collisions(
+        &mut self,
+        step: &StepData,
+        x: &mut [Vec3],
+        v: &mut [Vec3],
+        rigid_beyond: Option<Real>,
+    ) -> bool {
         let Some(world) = &mut self.ws.collisions else { return false };
         let cap_hits = self.ws.counters.cap_hits;
         let before = x.to_vec();
-        world.resolve(&self.state.mesh, &step.x0, x, &step.inv_mass, &mut self.ws.counters);
+        world.resolve(&self.state.mesh, &step.x0, x, &step.inv_mass, rigid_beyond, &mut self.ws.counters);
         for i in 0..x.len() {
             if x[i] != before[i] {
                 v[i] = (x[i] - step.x0[i]) / step.h;
