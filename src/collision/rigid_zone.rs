@@ -132,10 +132,8 @@ mod tests {
     #[test]
     fn a_spinning_zone_turns_without_shrinking() {
         // Four nodes in a square whose solved motion is a quarter of a small turn about z.
-        let x0: Vec<Vec3> = [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)]
-            .iter()
-            .map(|&(a, b)| Vec3::new(a, b, 0.0))
-            .collect();
+        let x0: Vec<Vec3> =
+            [(1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0)].iter().map(|&(a, b)| Vec3::new(a, b, 0.0)).collect();
         let w = 0.01;
         let mut x: Vec<Vec3> = x0.iter().map(|p| p + w * Vec3::z().cross(p)).collect();
         let inv_mass = [1.0; 4];

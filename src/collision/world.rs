@@ -14,12 +14,12 @@ use super::broad::{BroadPhase, Candidate, Interval, VF};
 use super::ccd::{edge_edge_ccd, vertex_face_ccd, Impact, CCD_TOLERANCE};
 use super::geometry::closest_point_triangle;
 use super::impact_zones::{resolve_zone, ZoneConstraint, ZoneState};
-use super::rigid_zone::resolve_zone_rigid;
 use super::obstacle::ObstacleBody;
 use super::params::CollisionParams;
 use super::proximity::{
     edge_edge_contact, node_face_contact, obstacle_edge_contact, obstacle_vertex_contact, Contact, Law,
 };
+use super::rigid_zone::resolve_zone_rigid;
 use super::sdf::MeshSdf;
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;

@@ -141,6 +141,7 @@ impl Simulation {
                     &s.state.mesh,
                     &s.ws.rest.membrane,
                     &stage.limits,
+                    x0,
                     x,
                     inv_mass,
                     &mut moved,
