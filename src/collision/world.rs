@@ -40,7 +40,8 @@ pub struct CollisionCounters {
     pub flung_reverted: usize,
     /// Zones whose projection had no solution (rigid zones included).
     pub failed_zones: usize,
-    /// Zones that became rigid at the smallest step (`CollisionWorld::resolve`).
+    /// Zones that became rigid, or rigid zones that took in more nodes, at the smallest step
+    /// (`CollisionWorld::resolve`).
     pub rigid_zones: usize,
     /// Friction contacts sticking and sliding at the accepted solves.
     pub sticking: usize,

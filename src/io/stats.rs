@@ -133,8 +133,9 @@ pub struct CollisionFrameStats {
     pub flung_reverted: usize,
     /// Zones whose projection had no solution (rigid zones that had none included).
     pub failed_zones: usize,
-    /// Impact zones that moved rigidly at a step of the smallest size because their projection
-    /// had no solution or flung a node past the speed cap.
+    /// Impact zones made rigid at a step of the smallest size because their projection had no
+    /// solution or flung a node past the speed cap (a rigid zone that takes in more nodes
+    /// counts again).
     #[serde(default)]
     pub rigid_zones: usize,
     /// Cloth nodes deeper than thickness/2 inside an obstacle at the frame end (must be 0).

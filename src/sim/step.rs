@@ -150,13 +150,13 @@ impl Simulation {
         if self.ws.collisions.is_some() && !self.scene.disabled.collision {
             // The smallest step: zones without a projection, or whose projection would fling a
             // node past the speed cap, move rigidly instead (checks.rs, "Collisions left").
-            let cap = checks::speed_cap(&self.context(&step), &solved);
-            let rigid_beyond = accept_unresolved.then_some(cap * step.h);
+            let cap = accept_unresolved.then(|| checks::speed_cap(&self.context(&step), &solved));
+            let rigid_beyond = cap.map(|cap| cap * step.h);
             let capped = self.timed(Stage::Collision, |s| s.resolve_collisions(&step, &mut x, &mut v, rigid_beyond));
             if capped && !accept_unresolved {
                 return Err(StepFault::Retry(Fault::Collisions));
             }
-            if accept_unresolved {
+            if let Some(cap) = cap {
                 // A node still flung past the cap keeps the solve's motion.
                 let mut reverted = 0;
                 for i in 0..x.len() {
