@@ -122,14 +122,10 @@ impl CollisionWorld {
                 }
                 let mut state = ZoneState { x, inv_mass, fixed: &self.obs_x1 };
                 let free: Vec<usize> = zone_nodes.iter().copied().filter(|&i| inv_mass[i] > 0.0).collect();
-                let projected = match rigid_beyond {
-                    Some(_) if free.iter().any(|&i| rigid[i]) => false,
-                    Some(limit) => {
-                        resolve_zone(&mut state, &cons, 1e-12).is_ok()
-                            && free.iter().all(|&i| (state.x[i] - x0[i]).norm() <= limit)
-                    }
-                    None => resolve_zone(&mut state, &cons, 1e-12).is_ok(),
-                };
+                let already_rigid = rigid_beyond.is_some() && free.iter().any(|&i| rigid[i]);
+                let projected = !already_rigid
+                    && resolve_zone(&mut state, &cons, 1e-12).is_ok()
+                    && rigid_beyond.is_none_or(|limit| free.iter().all(|&i| (state.x[i] - x0[i]).norm() <= limit));
                 if projected {
                     continue;
                 }
