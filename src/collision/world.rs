@@ -49,6 +49,8 @@ pub struct CollisionCounters {
     /// Solves and factorisations beyond the first that friction's mode changes took.
     pub friction_resolves: usize,
     pub friction_refactors: usize,
+    /// Of `friction_refactors`, those of the contact block alone (`solver::tail`).
+    pub tail_refactors: usize,
     /// Steps ending with friction contacts not in the mode Coulomb's law gives them
     /// (`friction::MAX_REFACTORS`, `friction::MAX_SOLVES`).
     pub friction_unconverged: usize,

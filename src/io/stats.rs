@@ -150,6 +150,9 @@ pub struct CollisionFrameStats {
     pub friction_resolves: usize,
     #[serde(default)]
     pub friction_refactors: usize,
+    /// Of `friction_refactors`, those that refactorised the contact nodes' block alone.
+    #[serde(default)]
+    pub tail_refactors: usize,
     /// Steps ending with friction contacts not in the mode Coulomb's law gives them (mode changes
     /// beyond the refactorisation limit wait for the next step; sliding forces beyond the solve
     /// limit keep their last value).

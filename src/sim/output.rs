@@ -241,6 +241,7 @@ fn frame_stats(sim: &mut Simulation, number: usize, adaptive: bool) -> FrameStat
             sliding: c.sliding,
             friction_resolves: c.friction_resolves,
             friction_refactors: c.friction_refactors,
+            tail_refactors: c.tail_refactors,
             friction_unconverged: c.friction_unconverged,
         });
         sim.ws.timers.since(Stage::PenetrationCheck, clock);

@@ -308,6 +308,7 @@ impl Simulation {
         c.sliding += slide;
         c.friction_resolves += timing.solves - 1;
         c.friction_refactors += timing.factorisations - 1;
+        c.tail_refactors += timing.tail_factorisations;
         c.friction_unconverged += usize::from(!converged);
         let timers = &mut self.ws.timers;
         timers.add(Stage::Assembly, timing.assemble_s);

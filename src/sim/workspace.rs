@@ -124,10 +124,13 @@ impl Workspace {
             state.extra_pairs.dedup();
             self.pending_pattern = Some(BlockPattern::new(&state.mesh, &self.rest.hinges, &state.extra_pairs));
         }
-        match self.pending_pattern.take() {
-            Some(pattern) => self.analyse(pattern, state),
-            None => Ok(()),
+        if let Some(pattern) = self.pending_pattern.take() {
+            self.analyse(pattern, state)?;
         }
+        let mut tail: Vec<usize> = contacts.iter().flat_map(|c| c.nodes).filter(|&i| i < n).collect();
+        tail.sort_unstable();
+        tail.dedup();
+        self.system.set_tail(&tail).map_err(|source| SimError::Solve { step: state.steps, time: state.time, source })
     }
 
     /// A new implicit system over `pattern`: fill-reducing ordering and symbolic factorisation.

@@ -10,11 +10,13 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, simplicial, supernodal, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
+    SymmetricOrdering,
 };
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 
 use super::pattern::ScalarCsc;
+use super::tail::Tail;
 
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum SolveError {
@@ -35,6 +37,8 @@ pub struct Cholesky {
     value_src: Vec<usize>,
     l_values: Vec<f64>,
     buffer: MemBuffer,
+    /// The contact block refactorised alone (`solver::tail`), when the ordering has one.
+    tail: Option<Tail>,
 }
 
 impl Cholesky {
@@ -44,6 +48,54 @@ impl Cholesky {
         let symbolic = factorize_symbolic_cholesky(sym, Side::Lower, Default::default(), Default::default())
             .map_err(|e| SolveError::Symbolic(format!("{e:?}")))?;
         Ok(Self::with_symbolic(csc, symbolic))
+    }
+
+    /// The fill-reducing order of the analysis (new position → unknown).
+    pub fn order(&self) -> Vec<usize> {
+        match self.symbolic.perm() {
+            Some(p) => p.arrays().0.to_vec(),
+            None => (0..self.symbolic.nrows()).collect(),
+        }
+    }
+
+    /// Analyses the pattern in the order `fwd` (new position → unknown) whose last `tail`
+    /// unknowns form the block refactorised alone (`solver::tail`; none when the analysis picks
+    /// the simplicial kernel, for small systems).
+    pub fn analyse_ordered(csc: &ScalarCsc, fwd: &[usize], tail: usize) -> Result<Self, SolveError> {
+        let n = csc.dim;
+        let mut inv = vec![0; n];
+        for (k, &i) in fwd.iter().enumerate() {
+            inv[i] = k;
+        }
+        let perm = faer::perm::PermRef::new_checked(fwd, &inv, n);
+        let sym = SymbolicSparseColMatRef::new_checked(n, n, &csc.col_ptr, None, &csc.row_idx);
+        let symbolic =
+            factorize_symbolic_cholesky(sym, Side::Lower, SymmetricOrdering::Custom(perm), Default::default())
+                .map_err(|e| SolveError::Symbolic(format!("{e:?}")))?;
+        let mut chol = Self::with_symbolic(csc, symbolic);
+        if let (SymbolicCholeskyRaw::Supernodal(s), true) = (chol.symbolic.raw(), tail > 0) {
+            let start = n - tail;
+            let (col_ptr, row_idx) = (&chol.perm_col_ptr, &chol.perm_row_idx);
+            let a_entries = (start..n).flat_map(|c| row_idx[col_ptr[c]..col_ptr[c + 1]].iter().map(move |&r| (r, c)));
+            let mut l_entries = Vec::new();
+            for sn in 0..s.n_supernodes() {
+                let (b, e) = (s.supernode_begin()[sn], s.supernode_end()[sn]);
+                if e <= start {
+                    continue;
+                }
+                let pattern = s.supernode(sn).pattern();
+                let rows = e - b + pattern.len();
+                let row = |r: usize| if r < e - b { b + r } else { pattern[r - (e - b)] };
+                let offset = s.col_ptr_for_val()[sn];
+                for c in b.max(start)..e {
+                    for r in c - b..rows {
+                        l_entries.push((row(r), c, offset + (c - b) * rows + r));
+                    }
+                }
+            }
+            chol.tail = Some(Tail::new(n, start, col_ptr[start], a_entries, l_entries.into_iter()));
+        }
+        Ok(chol)
     }
 
     fn with_symbolic(csc: &ScalarCsc, symbolic: SymbolicCholesky<usize>) -> Self {
@@ -58,7 +110,7 @@ impl Cholesky {
         };
         let req = factor_req.or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
         let l_values = vec![0.0; symbolic.len_val()];
-        Cholesky { symbolic, perm_col_ptr, perm_row_idx, value_src, l_values, buffer: MemBuffer::new(req) }
+        Cholesky { symbolic, perm_col_ptr, perm_row_idx, value_src, l_values, buffer: MemBuffer::new(req), tail: None }
     }
 
     /// For each value the numeric factorisation takes (`factor`), the `ScalarCsc::src` of the
@@ -91,7 +143,25 @@ impl Cholesky {
             ),
         }
         .map(|_| ())
-        .map_err(|e| SolveError::NotPositiveDefinite(format!("{e:?}")))
+        .map_err(|e| SolveError::NotPositiveDefinite(format!("{e:?}")))?;
+        if let Some(t) = &mut self.tail {
+            t.full(values);
+        }
+        Ok(())
+    }
+
+    /// Refactorisation for `values` that differ from the last factorisation's: of the tail
+    /// block alone when they differ only there (returns true), else in full.
+    pub fn refactor(&mut self, values: &[f64]) -> Result<bool, SolveError> {
+        match &mut self.tail {
+            Some(t) if t.applies(values) => t.refactor(values, &mut self.l_values).map(|_| true),
+            _ => self.factor(values).map(|_| false),
+        }
+    }
+
+    /// Unknowns in the tail block (0 without one).
+    pub fn tail_len(&self) -> usize {
+        self.tail.as_ref().map_or(0, |t| t.dim)
     }
 
     /// Solves A x = rhs in place with the last factorisation.
