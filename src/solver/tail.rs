@@ -2,30 +2,50 @@
 //!
 //! Within one step the friction and contact active-set iteration (`collision::friction`,
 //! `collision::speculative`) changes the system matrix only in the couplings among the cloth
-//! nodes of the step's contacts. With those nodes' unknowns ordered last (the tail T), the
-//! Cholesky factor splits as
+//! nodes of the step's contacts. With those nodes' unknowns ordered last (the tail), the
+//! Cholesky factor splits as (block Cholesky; Golub & Van Loan, Matrix Computations, §4.2)
 //!
 //! ```text
 //!   P A Pᵀ = [A₁₁ A₁₂; A₂₁ A₂₂] = [L₁₁ 0; L₂₁ L₂₂] [L₁₁ 0; L₂₁ L₂₂]ᵀ,  L₂₂ L₂₂ᵀ = S = A₂₂ − L₂₁ L₂₁ᵀ,
 //! ```
 //!
 //! and a change Δ confined to A₂₂ leaves L₁₁ and L₂₁ as they are: the new factor's last block is
-//! the Cholesky factor of S + Δ = L₂₂ L₂₂ᵀ + Δ (the block elimination of George & Liu 1981,
-//! ch. 6; CHOLMOD's "update of the trailing block" in Davis 2006, §11). S is formed once per
-//! full factorisation, at its first refactorisation, from the stored L₂₂; each refactorisation
-//! is then one dense Cholesky of the tail's size, written back into the sparse factor's own
-//! storage, so the solve is unchanged. Structurally zero entries of L₂₂ stay exact zeros in the
-//! dense factor (each is a sum of products with an exact zero factor), so nothing is dropped.
+//! the Cholesky factor of S + Δ = L₂₂ L₂₂ᵀ + Δ. S is formed once per full factorisation, at its
+//! first refactorisation, from the stored L₂₂ (in L₂₂'s own pattern: a Cholesky factor's pattern
+//! holds the pattern of L Lᵀ and of its own factor); each refactorisation is then a sparse
+//! Cholesky of the tail alone (faer's supernodal kernel, identity order), written back into the
+//! full factor's storage, so the solve is unchanged. Entries the tail's own symbolic analysis
+//! stores beyond L₂₂'s pattern (relaxed supernodes) are structurally zero, computed as exact
+//! zeros, and dropped.
 //!
 //! The ordering is the pattern's fill-reducing (AMD) order with the tail's unknowns moved to the
 //! end, their relative order kept; `ImplicitSystem::set_tail` decides when it is worth it.
 
 use faer::dyn_stack::{MemBuffer, MemStack};
-use faer::linalg::cholesky::llt::factor::{cholesky_in_place, cholesky_in_place_scratch, LltRegularization};
+use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, Par};
+use faer::sparse::linalg::cholesky::{
+    factorize_symbolic_cholesky, supernodal, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw,
+    SymmetricOrdering,
+};
+use faer::sparse::linalg::SupernodalThreshold;
+use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
+use faer::{Accum, Mat, Par, Side};
 
 use super::SolveError;
+
+/// The part of one supernode of the full factor in the tail's columns: its values start at
+/// `offset` in L's values, column-major with `stride` rows; its tail columns are the `cols`
+/// from local column `first` on, and their rows are local rows `first..stride`, `rows` (global
+/// in `Tail::new`'s argument, within the tail after). The top `cols` × `cols` part is the
+/// supernode's diagonal block: lower triangular (its upper part is not the factor's).
+pub(super) struct Block {
+    pub offset: usize,
+    pub stride: usize,
+    pub first: usize,
+    pub cols: usize,
+    pub rows: Vec<usize>,
+}
 
 /// The tail block of one symbolic factorisation.
 pub(super) struct Tail {
@@ -33,44 +53,106 @@ pub(super) struct Tail {
     pub dim: usize,
     /// Where the tail block's values begin in the permuted values (every value from here on has
     /// its column in the tail).
-    pub first_value: usize,
-    /// Per permuted value of the tail block: its row and column within the block.
-    a_entries: Vec<(usize, usize)>,
-    /// Per stored entry of L₂₂: its row, column (within the block) and index in L's values.
-    l_entries: Vec<(usize, usize, usize)>,
+    first_value: usize,
+    /// Per permuted value of the tail block: its position in L₂₂'s pattern.
+    a_pos: Vec<usize>,
+    /// L₂₂'s pattern (lower, columns in order, rows sorted, within the block).
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    /// The full factor's supernodes in the tail (`Block`), rows within the block.
+    blocks: Vec<Block>,
+    /// The tail's own analysis, and per value of its factor the full factor's index (or
+    /// `usize::MAX` for a structural zero of L₂₂).
+    symbolic: SymbolicCholesky<usize>,
+    out_idx: Vec<usize>,
     /// The values of the last full factorisation.
     base: Vec<f64>,
-    /// L₂₂ L₂₂ᵀ of the last full factorisation (formed at its first refactorisation).
-    schur: Option<Mat<f64>>,
-    work: Mat<f64>,
+    /// S = L₂₂ L₂₂ᵀ of the last full factorisation in L₂₂'s pattern (formed at its first
+    /// refactorisation), the matrix refactorised and its factor.
+    schur: Option<Vec<f64>>,
+    a: Vec<f64>,
+    l: Vec<f64>,
     buffer: MemBuffer,
 }
 
 impl Tail {
     /// The tail from column `start` on of a factor of dimension `n`: `a_entries` lists each
     /// permuted value from `first_value` on as (row, column); `l_entries` each stored entry of
-    /// L in those columns as (row, column, index in L's values), all in permuted numbering.
+    /// L in those columns as (row, column, index in L's values), by column, rows ascending; all
+    /// in permuted numbering.
     pub fn new(
         n: usize,
         start: usize,
         first_value: usize,
         a_entries: impl Iterator<Item = (usize, usize)>,
-        l_entries: impl Iterator<Item = (usize, usize, usize)>,
-    ) -> Tail {
+        l_entries: &[(usize, usize, usize)],
+        mut blocks: Vec<Block>,
+    ) -> Result<Tail, SolveError> {
+        blocks.iter_mut().for_each(|b| b.rows.iter_mut().for_each(|r| *r -= start));
         let dim = n - start;
-        let a_entries = a_entries.map(|(r, c)| (r - start, c - start)).collect();
-        let l_entries = l_entries.map(|(r, c, k)| (r - start, c - start, k)).collect();
-        let req = cholesky_in_place_scratch::<f64>(dim, Par::Seq, Default::default());
-        Tail {
+        let mut col_ptr = vec![0; dim + 1];
+        let (mut row_idx, mut l_idx) = (Vec::with_capacity(l_entries.len()), Vec::with_capacity(l_entries.len()));
+        for &(r, c, k) in l_entries {
+            let (r, c) = (r - start, c - start);
+            col_ptr[c + 1] += 1;
+            row_idx.push(r);
+            l_idx.push(k);
+        }
+        for c in 0..dim {
+            col_ptr[c + 1] += col_ptr[c];
+        }
+        let position = |r: usize, c: usize| {
+            let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
+            rows.binary_search(&r).map(|p| col_ptr[c] + p)
+        };
+        let a_pos = a_entries
+            .map(|(r, c)| position(r - start, c - start))
+            .collect::<Result<Vec<usize>, usize>>()
+            .map_err(|_| SolveError::Symbolic("a contact coupling outside the tail factor's pattern".into()))?;
+        let identity: Vec<usize> = (0..dim).collect();
+        let perm = faer::perm::PermRef::new_checked(&identity, &identity, dim);
+        let sym = SymbolicSparseColMatRef::new_checked(dim, dim, &col_ptr, None, &row_idx);
+        let params = CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+            ..Default::default()
+        };
+        let symbolic = factorize_symbolic_cholesky(sym, Side::Lower, SymmetricOrdering::Custom(perm), params)
+            .map_err(|e| SolveError::Symbolic(format!("{e:?} (tail block)")))?;
+        let SymbolicCholeskyRaw::Supernodal(s) = symbolic.raw() else {
+            return Err(SolveError::Symbolic("the tail block's analysis is not supernodal".into()));
+        };
+        let mut out_idx = vec![usize::MAX; symbolic.len_val()];
+        for sn in 0..s.n_supernodes() {
+            let (b, e) = (s.supernode_begin()[sn], s.supernode_end()[sn]);
+            let pattern = s.supernode(sn).pattern();
+            let rows = e - b + pattern.len();
+            let offset = s.col_ptr_for_val()[sn];
+            for c in b..e {
+                for r in c - b..rows {
+                    let row = if r < e - b { b + r } else { pattern[r - (e - b)] };
+                    if let Ok(p) = position(row, c) {
+                        out_idx[offset + (c - b) * rows + r] = l_idx[p];
+                    }
+                }
+            }
+        }
+        let req = supernodal::factorize_supernodal_numeric_llt_scratch::<usize, f64>(s, Par::Seq, Default::default());
+        let (len, nnz) = (symbolic.len_val(), row_idx.len());
+        Ok(Tail {
             dim,
             first_value,
-            a_entries,
-            l_entries,
+            a_pos,
+            col_ptr,
+            row_idx,
+            blocks,
+            symbolic,
+            out_idx,
             base: Vec::new(),
             schur: None,
-            work: Mat::zeros(dim, dim),
+            a: vec![0.0; nnz],
+            l: vec![0.0; len],
             buffer: MemBuffer::new(req),
-        }
+        })
     }
 
     /// Records the values of a full factorisation.
@@ -85,41 +167,61 @@ impl Tail {
         self.base.len() == values.len() && values[..self.first_value] == self.base[..self.first_value]
     }
 
-    /// Refactorises the tail block for `values` (which `applies`), overwriting L₂₂ in `l_values`.
-    pub fn refactor(&mut self, values: &[f64], l_values: &mut [f64]) -> Result<(), SolveError> {
-        let dim = self.dim;
-        if self.schur.is_none() {
-            let mut l22 = Mat::<f64>::zeros(dim, dim);
-            for &(r, c, k) in &self.l_entries {
-                l22[(r, c)] = l_values[k];
-            }
-            let mut s = Mat::<f64>::zeros(dim, dim);
-            matmul(s.as_mut(), Accum::Replace, l22.as_ref(), l22.transpose(), 1.0, Par::Seq);
-            self.schur = Some(s);
-        }
-        let schur = self.schur.as_ref().expect("formed above");
-        self.work.copy_from(schur);
-        let tail_values = &values[self.first_value..];
-        let base = &self.base[self.first_value..];
-        for (&(r, c), (v, b)) in self.a_entries.iter().zip(tail_values.iter().zip(base)) {
-            if v != b {
-                let d = v - b;
-                self.work[(r, c)] += d;
-                if r != c {
-                    self.work[(c, r)] += d;
+    /// S = L₂₂ L₂₂ᵀ in L₂₂'s pattern from the full factor's values, supernode by supernode:
+    /// each adds B Bᵀ, B its tail columns (dense, `Block`), at its rows.
+    fn schur(&self, l_values: &[f64]) -> Vec<f64> {
+        let (cp, ri) = (&self.col_ptr, &self.row_idx);
+        let mut s = vec![0.0; ri.len()];
+        for blk in &self.blocks {
+            let m = blk.rows.len();
+            let b = Mat::<f64>::from_fn(m, blk.cols, |r, c| match r >= c {
+                true => l_values[blk.offset + (blk.first + c) * blk.stride + blk.first + r],
+                false => 0.0,
+            });
+            let mut p = Mat::<f64>::zeros(m, m);
+            matmul(p.as_mut(), Accum::Replace, b.as_ref(), b.transpose(), 1.0, Par::Seq);
+            for (c, &j) in blk.rows.iter().enumerate() {
+                // Column j of the pattern holds every row of the block from j on (a Cholesky
+                // factor's pattern holds that of L Lᵀ): a merge of the two sorted lists.
+                let mut q = cp[j];
+                for (r, &i) in blk.rows.iter().enumerate().skip(c) {
+                    while q + 1 < cp[j + 1] && ri[q] < i {
+                        q += 1;
+                    }
+                    debug_assert_eq!(ri[q], i, "L₂₂'s pattern holds L₂₂ L₂₂ᵀ's");
+                    s[q] += p[(r, c)];
                 }
             }
         }
-        cholesky_in_place(
-            self.work.as_mut(),
+        s
+    }
+
+    /// Refactorises the tail block for `values` (which `applies`), overwriting L₂₂ in `l_values`.
+    pub fn refactor(&mut self, values: &[f64], l_values: &mut [f64]) -> Result<(), SolveError> {
+        if self.schur.is_none() {
+            self.schur = Some(self.schur(l_values));
+        }
+        self.a.copy_from_slice(self.schur.as_ref().expect("formed above"));
+        let (now, base) = (&values[self.first_value..], &self.base[self.first_value..]);
+        for (&p, (v, b)) in self.a_pos.iter().zip(now.iter().zip(base)) {
+            self.a[p] += v - b;
+        }
+        let SymbolicCholeskyRaw::Supernodal(s) = self.symbolic.raw() else { unreachable!("checked in Tail::new") };
+        let sym = SymbolicSparseColMatRef::new_checked(self.dim, self.dim, &self.col_ptr, None, &self.row_idx);
+        supernodal::factorize_supernodal_numeric_llt(
+            &mut self.l,
+            SparseColMatRef::new(sym, &self.a),
             LltRegularization::default(),
+            s,
             Par::Seq,
             MemStack::new(&mut self.buffer),
             Default::default(),
         )
         .map_err(|e| SolveError::NotPositiveDefinite(format!("{e:?} (tail block)")))?;
-        for &(r, c, k) in &self.l_entries {
-            l_values[k] = self.work[(r, c)];
+        for (&k, &x) in self.out_idx.iter().zip(&self.l) {
+            if k != usize::MAX {
+                l_values[k] = x;
+            }
         }
         Ok(())
     }
