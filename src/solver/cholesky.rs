@@ -16,7 +16,7 @@ use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 
 use super::pattern::ScalarCsc;
-use super::tail::{Block, Tail};
+use super::tail::Tail;
 
 #[derive(Debug, thiserror::Error, Clone, PartialEq)]
 pub enum SolveError {
@@ -74,34 +74,7 @@ impl Cholesky {
                 .map_err(|e| SolveError::Symbolic(format!("{e:?}")))?;
         let mut chol = Self::with_symbolic(csc, symbolic);
         if let (SymbolicCholeskyRaw::Supernodal(s), true) = (chol.symbolic.raw(), tail > 0) {
-            let start = n - tail;
-            let (col_ptr, row_idx) = (&chol.perm_col_ptr, &chol.perm_row_idx);
-            let a_entries = (start..n).flat_map(|c| row_idx[col_ptr[c]..col_ptr[c + 1]].iter().map(move |&r| (r, c)));
-            let (mut l_entries, mut blocks) = (Vec::new(), Vec::new());
-            for sn in 0..s.n_supernodes() {
-                let (b, e) = (s.supernode_begin()[sn], s.supernode_end()[sn]);
-                if e <= start {
-                    continue;
-                }
-                let pattern = s.supernode(sn).pattern();
-                let rows = e - b + pattern.len();
-                let row = |r: usize| if r < e - b { b + r } else { pattern[r - (e - b)] };
-                let offset = s.col_ptr_for_val()[sn];
-                for c in b.max(start)..e {
-                    for r in c - b..rows {
-                        l_entries.push((row(r), c, offset + (c - b) * rows + r));
-                    }
-                }
-                let c0 = b.max(start) - b;
-                blocks.push(Block {
-                    offset,
-                    stride: rows,
-                    first: c0,
-                    cols: e - b - c0,
-                    rows: (c0..rows).map(row).collect(),
-                });
-            }
-            chol.tail = Some(Tail::new(n, start, col_ptr[start], a_entries, &l_entries, blocks)?);
+            chol.tail = Some(Tail::new(s, &chol.perm_col_ptr, &chol.perm_row_idx, n - tail)?);
         }
         Ok(chol)
     }

@@ -24,6 +24,7 @@
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::linalg::matmul::matmul;
+use faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky;
 use faer::sparse::linalg::cholesky::{
     factorize_symbolic_cholesky, supernodal, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw,
     SymmetricOrdering,
@@ -75,24 +76,53 @@ pub(super) struct Tail {
     buffer: MemBuffer,
 }
 
+/// Calls `f(row, column, index in the values)` for each stored entry of a supernodal factor's
+/// columns from `from` on, by column, rows ascending (the diagonal block's lower part, then the
+/// supernode's row pattern); returns the supernodes' `Block`s over those columns.
+fn for_each_entry(
+    s: &SymbolicSupernodalCholesky<usize>,
+    from: usize,
+    mut f: impl FnMut(usize, usize, usize),
+) -> Vec<Block> {
+    let mut blocks = Vec::new();
+    for sn in 0..s.n_supernodes() {
+        let (b, e) = (s.supernode_begin()[sn], s.supernode_end()[sn]);
+        if e <= from {
+            continue;
+        }
+        let pattern = s.supernode(sn).pattern();
+        let stride = e - b + pattern.len();
+        let row = |r: usize| if r < e - b { b + r } else { pattern[r - (e - b)] };
+        let offset = s.col_ptr_for_val()[sn];
+        for c in b.max(from)..e {
+            for r in c - b..stride {
+                f(row(r), c, offset + (c - b) * stride + r);
+            }
+        }
+        let first = b.max(from) - b;
+        blocks.push(Block { offset, stride, first, cols: e - b - first, rows: (first..stride).map(row).collect() });
+    }
+    blocks
+}
+
 impl Tail {
-    /// The tail from column `start` on of a factor of dimension `n`: `a_entries` lists each
-    /// permuted value from `first_value` on as (row, column); `l_entries` each stored entry of
-    /// L in those columns as (row, column, index in L's values), by column, rows ascending; all
-    /// in permuted numbering.
+    /// The tail from column `start` on of the full factor `s`, whose input P A Pᵀ has the lower
+    /// pattern `col_ptr`, `row_idx` (permuted numbering).
     pub fn new(
-        n: usize,
+        s: &SymbolicSupernodalCholesky<usize>,
+        a_col_ptr: &[usize],
+        a_row_idx: &[usize],
         start: usize,
-        first_value: usize,
-        a_entries: impl Iterator<Item = (usize, usize)>,
-        l_entries: &[(usize, usize, usize)],
-        mut blocks: Vec<Block>,
     ) -> Result<Tail, SolveError> {
+        let n = s.nrows();
+        let mut l_entries = Vec::new();
+        let mut blocks = for_each_entry(s, start, |r, c, k| l_entries.push((r, c, k)));
         blocks.iter_mut().for_each(|b| b.rows.iter_mut().for_each(|r| *r -= start));
+        let first_value = a_col_ptr[start];
         let dim = n - start;
         let mut col_ptr = vec![0; dim + 1];
         let (mut row_idx, mut l_idx) = (Vec::with_capacity(l_entries.len()), Vec::with_capacity(l_entries.len()));
-        for &(r, c, k) in l_entries {
+        for &(r, c, k) in &l_entries {
             let (r, c) = (r - start, c - start);
             col_ptr[c + 1] += 1;
             row_idx.push(r);
@@ -105,7 +135,8 @@ impl Tail {
             let rows = &row_idx[col_ptr[c]..col_ptr[c + 1]];
             rows.binary_search(&r).map(|p| col_ptr[c] + p)
         };
-        let a_pos = a_entries
+        let a_pos = (start..n)
+            .flat_map(|c| a_row_idx[a_col_ptr[c]..a_col_ptr[c + 1]].iter().map(move |&r| (r, c)))
             .map(|(r, c)| position(r - start, c - start))
             .collect::<Result<Vec<usize>, usize>>()
             .map_err(|_| SolveError::Symbolic("a contact coupling outside the tail factor's pattern".into()))?;
@@ -122,20 +153,11 @@ impl Tail {
             return Err(SolveError::Symbolic("the tail block's analysis is not supernodal".into()));
         };
         let mut out_idx = vec![usize::MAX; symbolic.len_val()];
-        for sn in 0..s.n_supernodes() {
-            let (b, e) = (s.supernode_begin()[sn], s.supernode_end()[sn]);
-            let pattern = s.supernode(sn).pattern();
-            let rows = e - b + pattern.len();
-            let offset = s.col_ptr_for_val()[sn];
-            for c in b..e {
-                for r in c - b..rows {
-                    let row = if r < e - b { b + r } else { pattern[r - (e - b)] };
-                    if let Ok(p) = position(row, c) {
-                        out_idx[offset + (c - b) * rows + r] = l_idx[p];
-                    }
-                }
+        for_each_entry(s, 0, |r, c, k| {
+            if let Ok(p) = position(r, c) {
+                out_idx[k] = l_idx[p];
             }
-        }
+        });
         let req = supernodal::factorize_supernodal_numeric_llt_scratch::<usize, f64>(s, Par::Seq, Default::default());
         let (len, nnz) = (symbolic.len_val(), row_idx.len());
         Ok(Tail {
