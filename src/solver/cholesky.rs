@@ -195,7 +195,7 @@ fn permuted_pattern(symbolic: &SymbolicCholesky<usize>, csc: &ScalarCsc) -> (Vec
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::forces::RestState;
     use crate::mesh::rectangle;
@@ -203,14 +203,12 @@ mod tests {
     use faer::sparse::linalg::cholesky::CholeskySymbolicParams;
     use faer::sparse::linalg::SupernodalThreshold;
 
-    /// Writing the values pre-permuted gives the factor faer's own `factorize_numeric_llt` gives,
-    /// bit for bit, on both of faer's numeric paths.
-    #[test]
-    fn prepermuted_factor_matches_faer_bitwise() {
-        let mesh = rectangle(1.0, 1.0, 9, 7).unwrap();
+    /// The pattern of an `nx` × `ny` rectangle's system and an SPD matrix on it with irregular
+    /// values (diagonally dominant), indexed by `src` tag.
+    pub(crate) fn spd_system(nx: usize, ny: usize) -> (ScalarCsc, Vec<f64>) {
+        let mesh = rectangle(1.0, 1.0, nx, ny).unwrap();
         let rest = RestState::new(&mesh, |_| 0.0).unwrap();
         let csc = ScalarCsc::new(&BlockPattern::new(&mesh, &rest.hinges, &[]));
-        // An SPD matrix with irregular values (diagonally dominant), indexed by `src` tag.
         let mut by_src = vec![0.0; 9 * csc.row_idx.len()];
         for j in 0..csc.dim {
             for k in csc.col_ptr[j]..csc.col_ptr[j + 1] {
@@ -218,6 +216,14 @@ mod tests {
                 by_src[csc.src[k]] = if csc.row_idx[k] == j { 60.0 + t } else { -t };
             }
         }
+        (csc, by_src)
+    }
+
+    /// Writing the values pre-permuted gives the factor faer's own `factorize_numeric_llt` gives,
+    /// bit for bit, on both of faer's numeric paths.
+    #[test]
+    fn prepermuted_factor_matches_faer_bitwise() {
+        let (csc, by_src) = spd_system(9, 7);
         let a: Vec<f64> = csc.src.iter().map(|&s| by_src[s]).collect();
         let sym = SymbolicSparseColMatRef::new_checked(csc.dim, csc.dim, &csc.col_ptr, None, &csc.row_idx);
         for threshold in [SupernodalThreshold::FORCE_SIMPLICIAL, SupernodalThreshold::FORCE_SUPERNODAL] {

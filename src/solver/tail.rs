@@ -251,26 +251,16 @@ impl Tail {
 
 #[cfg(test)]
 mod tests {
-    use crate::forces::RestState;
     use crate::mesh::rectangle;
+    use crate::solver::cholesky::tests::spd_system;
     use crate::solver::cholesky::Cholesky;
-    use crate::solver::pattern::{BlockPattern, ScalarCsc};
 
     /// A refactorisation of the tail block alone solves the changed system as a full
     /// factorisation does (to rounding), and a change outside the block falls back to a full one.
     #[test]
     fn tail_refactorisation_solves_the_changed_system() {
         let mesh = rectangle(1.0, 1.0, 40, 40).unwrap();
-        let rest = RestState::new(&mesh, |_| 0.0).unwrap();
-        let csc = ScalarCsc::new(&BlockPattern::new(&mesh, &rest.hinges, &[]));
-        // SPD (diagonally dominant) values by `src` tag, as in cholesky.rs's test.
-        let mut by_src = vec![0.0; 9 * csc.row_idx.len()];
-        for j in 0..csc.dim {
-            for k in csc.col_ptr[j]..csc.col_ptr[j + 1] {
-                let t = ((k * 7919) % 101) as f64 / 97.0;
-                by_src[csc.src[k]] = if csc.row_idx[k] == j { 60.0 + t } else { -t };
-            }
-        }
+        let (csc, by_src) = spd_system(40, 40);
         // Two patches of contact nodes, one of them on the boundary.
         let n = mesh.nodes.len();
         let tail: Vec<usize> = (0..n)
