@@ -192,7 +192,12 @@ impl ImplicitSystem {
                     *v = b[((s % 9) / 3, s % 3)];
                 },
             );
-            let tail = self.chol.refactor(&self.values)?;
+            // A step's first factorisation is a full one, so that no step's factor depends on
+            // an earlier step's (a resumed run then takes the same bits).
+            let tail = match timing.factorisations {
+                0 => self.chol.factor(&self.values).map(|_| false)?,
+                _ => self.chol.refactor(&self.values)?,
+            };
             timing.factorisations += 1;
             timing.tail_factorisations += usize::from(tail);
         }

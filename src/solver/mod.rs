@@ -84,15 +84,13 @@ impl ImplicitSystem {
 impl ImplicitSystem {
     /// Orders the unknowns of `nodes` (sorted: the cloth nodes of the step's contacts) last, so
     /// that the step's refactorisations for their friction and contact modes factorise their
-    /// block alone (`solver::tail`). The analysis is kept while it covers `nodes` and is not
-    /// more than twice their size; without contacts, or with more than `TAIL_FRACTION` of the
-    /// nodes in contact, the system goes back to the plain fill-reducing order.
+    /// block alone (`solver::tail`); without contacts, or with more than `TAIL_FRACTION` of the
+    /// nodes in contact, the plain fill-reducing order. The order depends on the step's contacts
+    /// alone (not on earlier steps'), so a resumed run orders as the uninterrupted one did.
     pub fn set_tail(&mut self, nodes: &[usize]) -> Result<(), SolveError> {
         let fits = nodes.len() as f64 <= TAIL_FRACTION * self.pattern.nodes as f64;
-        let covered = nodes.iter().all(|i| self.tail.binary_search(i).is_ok());
-        let tight = self.tail.len() <= 2 * nodes.len() + 8;
         let wanted: &[usize] = if fits { nodes } else { &[] };
-        if (fits && covered && tight) || (wanted.is_empty() && self.tail.is_empty()) {
+        if wanted == self.tail.as_slice() {
             return Ok(());
         }
         let mut is_tail = vec![false; self.pattern.nodes];
