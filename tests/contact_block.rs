@@ -6,10 +6,10 @@
 
 mod common;
 
-use common::{inline_scene, temp_dir};
+use common::{inline_scene, temp_dir, write_checkpoint};
 use serde_json::json;
 use viewcloth::math::Real;
-use viewcloth::sim::checkpoint::{self, RunRecord};
+use viewcloth::sim::checkpoint;
 use viewcloth::sim::Simulation;
 
 fn scene_json() -> serde_json::Value {
@@ -49,20 +49,7 @@ fn contact_block_refactorisations_run_and_resume_bitwise() {
         a.advance_frame().unwrap();
         block += std::mem::take(&mut a.ws.counters).tail_refactors;
     }
-    let run = RunRecord {
-        scene_file: None,
-        mode: None,
-        camera_file: None,
-        fingerprint: checkpoint::scene_fingerprint(&load()),
-        frames: 8,
-        digits: 4,
-        export_obstacles: false,
-        every: 3,
-        format: Default::default(),
-        obj_velocities: false,
-    };
-    let path = checkpoint::checkpoint_path(&dir, 3, 4);
-    std::fs::write(&path, checkpoint::encode(&run, &a.state, &Default::default())).unwrap();
+    let (_, path) = write_checkpoint(&dir, &a, &load(), None, 8, 3);
     let mut b = Simulation::restore(load(), checkpoint::read(&path).unwrap().state).unwrap();
     for f in 4..=6 {
         a.advance_frame().unwrap();

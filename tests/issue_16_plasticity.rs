@@ -14,12 +14,12 @@ use std::path::{Path, PathBuf};
 
 mod common;
 
-use common::temp_dir;
+use common::{temp_dir, write_checkpoint};
 use serde_json::{json, Value};
 use viewcloth::math::{Real, Vec2, Vec3};
 use viewcloth::mesh::Mesh;
 use viewcloth::scene;
-use viewcloth::sim::checkpoint::{self, RunRecord};
+use viewcloth::sim::checkpoint;
 use viewcloth::sim::Simulation;
 
 const FRAMES: usize = 80;
@@ -249,20 +249,7 @@ fn a_checkpointed_plastic_state_resumes_bitwise() {
         a.advance_frame().unwrap();
     }
     assert!(a.state.plastic.as_ref().unwrap().damage.iter().any(|&d| d > 0.0), "nothing yielded yet");
-    let run = RunRecord {
-        scene_file: Some(file.clone()),
-        mode: None,
-        camera_file: None,
-        fingerprint: checkpoint::scene_fingerprint(&load()),
-        frames: FRAMES,
-        digits: 4,
-        export_obstacles: false,
-        every: 12,
-        format: Default::default(),
-        obj_velocities: false,
-    };
-    let path = checkpoint::checkpoint_path(&dir, 12, 4);
-    std::fs::write(&path, checkpoint::encode(&run, &a.state, &Default::default())).unwrap();
+    let (_, path) = write_checkpoint(&dir, &a, &load(), Some(file.clone()), FRAMES, 12);
     let mut b = Simulation::restore(load(), checkpoint::read(&path).unwrap().state).unwrap();
     let bits = |s: &Simulation| -> Vec<u64> {
         let p = s.state.plastic.as_ref().unwrap();

@@ -9,11 +9,11 @@ use std::time::{Duration, Instant};
 
 mod common;
 
-use common::temp_dir;
+use common::{temp_dir, write_checkpoint};
 use serde_json::{json, Value};
 use viewcloth::io::obj::parse_obj;
 use viewcloth::scene;
-use viewcloth::sim::checkpoint::{self, RunRecord};
+use viewcloth::sim::checkpoint;
 use viewcloth::sim::Simulation;
 
 const FRAMES: usize = 14;
@@ -171,20 +171,7 @@ fn restored_state_continues_bitwise() {
     for _ in 0..5 {
         a.advance_frame().unwrap();
     }
-    let run = RunRecord {
-        scene_file: Some(file.clone()),
-        mode: None,
-        camera_file: None,
-        fingerprint: checkpoint::scene_fingerprint(&load()),
-        frames: FRAMES,
-        digits: 4,
-        export_obstacles: false,
-        every: 5,
-        format: Default::default(),
-        obj_velocities: false,
-    };
-    let path = checkpoint::checkpoint_path(&dir, 5, 4);
-    std::fs::write(&path, checkpoint::encode(&run, &a.state, &Default::default())).unwrap();
+    let (run, path) = write_checkpoint(&dir, &a, &load(), Some(file.clone()), FRAMES, 5);
     let ck = checkpoint::read(&path).unwrap();
     assert_eq!(ck.run, run);
     let mut b = Simulation::restore(load(), ck.state).unwrap();

@@ -37,6 +37,35 @@ pub fn inline_scene(v: &serde_json::Value, base: &Path, name: &str) -> Scene {
     scene::load_str(&v.to_string(), Path::new(name), base, name).unwrap_or_else(|e| panic!("{e}"))
 }
 
+/// Writes `sim`'s state as the checkpoint of frame `frame` (of a `frames`-frame run of `scene`,
+/// read from `scene_file`, a checkpoint every `frame` frames, OBJ output) into `dir`; returns
+/// its run record and path.
+pub fn write_checkpoint(
+    dir: &Path,
+    sim: &viewcloth::sim::Simulation,
+    scene: &Scene,
+    scene_file: Option<PathBuf>,
+    frames: usize,
+    frame: usize,
+) -> (viewcloth::sim::checkpoint::RunRecord, PathBuf) {
+    use viewcloth::sim::checkpoint;
+    let run = checkpoint::RunRecord {
+        scene_file,
+        mode: None,
+        camera_file: None,
+        fingerprint: checkpoint::scene_fingerprint(scene),
+        frames,
+        digits: 4,
+        export_obstacles: false,
+        every: frame,
+        format: Default::default(),
+        obj_velocities: false,
+    };
+    let path = checkpoint::checkpoint_path(dir, frame, 4);
+    std::fs::write(&path, checkpoint::encode(&run, &sim.state, &Default::default())).unwrap();
+    (run, path)
+}
+
 /// Largest and material-area-weighted mean principal strain (largest principal stretch − 1) of
 /// an OBJ frame whose `vt` are material metres, computed here from the file alone (closed-form
 /// eigenvalue of FᵀF), to check what `stats.json` says.
