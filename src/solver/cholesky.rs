@@ -141,6 +141,7 @@ impl Cholesky {
     }
 
     /// Unknowns in the tail block (0 without one).
+    #[cfg(test)]
     pub fn tail_len(&self) -> usize {
         self.tail.as_ref().map_or(0, |t| t.dim)
     }
