@@ -38,6 +38,9 @@ pub struct CollisionCounters {
     /// Nodes the collision projection would have flung past the speed cap at the smallest step
     /// size, which kept their solved motion instead (`sim::checks`, "Collisions left").
     pub flung_reverted: usize,
+    /// Steps whose impact-zone pushes stored too much elastic energy and were spread through the
+    /// step's system instead (`solver::spread`).
+    pub spread_pushes: usize,
     /// Zones whose projection had no solution (rigid zones included).
     pub failed_zones: usize,
     /// Zones that became rigid, or rigid zones that took in more nodes, at the smallest step

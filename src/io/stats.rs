@@ -131,6 +131,10 @@ pub struct CollisionFrameStats {
     /// projection flung them past the speed cap (the run would have stopped).
     #[serde(default)]
     pub flung_reverted: usize,
+    /// Steps whose collision pushes stored more elastic energy than the end-of-step check
+    /// allows, spread through the step's implicit system and collided again instead of retried.
+    #[serde(default)]
+    pub spread_pushes: usize,
     /// Zones whose projection had no solution (rigid zones that had none included).
     pub failed_zones: usize,
     /// Impact zones made rigid at a step of the smallest size because their projection had no

@@ -234,6 +234,7 @@ fn frame_stats(sim: &mut Simulation, number: usize, adaptive: bool) -> FrameStat
             ccd_iterations: c.ccd_iterations,
             ccd_cap_hits: c.cap_hits,
             flung_reverted: c.flung_reverted,
+            spread_pushes: c.spread_pushes,
             failed_zones: c.failed_zones,
             rigid_zones: c.rigid_zones,
             penetrations: sim.penetrations(),

@@ -148,27 +148,25 @@ impl Simulation {
         let mut x = self.timed(Stage::Integration, |s| s.end_positions(&step, &v));
         self.constrain(&step.x0, &step.held_inv_mass, step.h, &mut x, &mut v);
         if self.ws.collisions.is_some() && !self.scene.disabled.collision {
-            // The smallest step: zones without a projection, or whose projection would fling a
-            // node past the speed cap, move rigidly instead (checks.rs, "Collisions left").
-            let cap = accept_unresolved.then(|| checks::speed_cap(&self.context(&step), &solved));
-            let rigid_beyond = cap.map(|cap| cap * step.h);
-            let capped = self.timed(Stage::Collision, |s| s.resolve_collisions(&step, &mut x, &mut v, rigid_beyond));
-            if capped && !accept_unresolved {
-                return Err(StepFault::Retry(Fault::Collisions));
-            }
-            if let Some(cap) = cap {
-                // A node still flung past the cap keeps the solve's motion.
-                let mut reverted = 0;
-                for i in 0..x.len() {
-                    if v[i].norm() > cap {
-                        (x[i], v[i]) = (solved.x[i], solved.v[i]);
-                        reverted += 1;
-                    }
+            let (pre_x, pre_v) = (x.clone(), v.clone());
+            self.collide(&step, &solved, &mut x, &mut v, accept_unresolved)?;
+            let checked = self.timed(Stage::FaultChecks, |s| checks::end_of_step(&s.context(&step), &solved, &x, &v));
+            match checked {
+                Err(Fault::EnergyGain { .. }) if !self.scene.disabled.physics => {
+                    // The impact zones' pushes stored elastic energy: spread them through the
+                    // step's system and collide again (`solver::spread`); the check judges that.
+                    let spread = self.timed(Stage::Collision, |s| s.spread_pushes(&step, &pre_x, &pre_v, &x));
+                    let Some((mut y, mut w)) = spread else { return Err(StepFault::Retry(checked.unwrap_err())) };
+                    self.collide(&step, &solved, &mut y, &mut w, accept_unresolved)?;
+                    self.timed(Stage::FaultChecks, |s| checks::end_of_step(&s.context(&step), &solved, &y, &w))?;
+                    (x, v) = (y, w);
+                    self.ws.counters.spread_pushes += 1;
                 }
-                self.ws.counters.flung_reverted += reverted;
+                other => other?,
             }
+        } else {
+            self.timed(Stage::FaultChecks, |s| checks::end_of_step(&s.context(&step), &solved, &x, &v))?;
         }
-        self.timed(Stage::FaultChecks, |s| checks::end_of_step(&s.context(&step), &solved, &x, &v))?;
         // The solve's acceleration (before collisions and constraints), as ARCSim keeps it.
         let a = solved.v.iter().zip(&self.state.mesh.nodes).map(|(v, n)| (v - n.v) / step.h).collect();
         self.commit(x, v, a, t1, step.stuck);
@@ -395,6 +393,62 @@ impl Simulation {
     /// Makes the end positions collision-free (CCD and impact zones); nodes the projection moved
     /// get the velocity of their new motion. Returns whether the iteration cap was hit with
     /// collisions left.
+    /// The collision stage on the end-of-step state `x`, `v` (`resolve_collisions`), with the
+    /// smallest step's reverts (checks.rs, "Collisions left").
+    fn collide(
+        &mut self,
+        step: &StepData,
+        solved: &checks::Solved,
+        x: &mut [Vec3],
+        v: &mut [Vec3],
+        accept_unresolved: bool,
+    ) -> Result<(), StepFault> {
+        // The smallest step: zones without a projection, or whose projection would fling a
+        // node past the speed cap, move rigidly instead (checks.rs, "Collisions left").
+        let cap = accept_unresolved.then(|| checks::speed_cap(&self.context(step), solved));
+        let rigid_beyond = cap.map(|cap| cap * step.h);
+        let capped = self.timed(Stage::Collision, |s| s.resolve_collisions(step, x, v, rigid_beyond));
+        if capped && !accept_unresolved {
+            return Err(StepFault::Retry(Fault::Collisions));
+        }
+        if let Some(cap) = cap {
+            // A node still flung past the cap keeps the solve's motion.
+            let mut reverted = 0;
+            for i in 0..x.len() {
+                if v[i].norm() > cap {
+                    (x[i], v[i]) = (solved.x[i], solved.v[i]);
+                    reverted += 1;
+                }
+            }
+            self.ws.counters.flung_reverted += reverted;
+        }
+        Ok(())
+    }
+
+    /// The pushes the collision stage made from `pre_x` to `x`, spread through the step's system
+    /// (`solver::spread`): the positions and velocities (those of the nodes that moved taken
+    /// from their motion over the step) before colliding again. None when there is nothing to
+    /// spread or too much.
+    fn spread_pushes(
+        &mut self,
+        step: &StepData,
+        pre_x: &[Vec3],
+        pre_v: &[Vec3],
+        x: &[Vec3],
+    ) -> Option<(Vec<Vec3>, Vec<Vec3>)> {
+        let at: Vec<usize> = (0..x.len()).filter(|&i| x[i] != pre_x[i] && step.inv_mass[i] > 0.0).collect();
+        let d: Vec<Vec3> = at.iter().map(|&i| x[i] - pre_x[i]).collect();
+        let delta = self.ws.system.spread(&at, &d)?;
+        let (mut y, mut w) = (pre_x.to_vec(), pre_v.to_vec());
+        for i in 0..y.len() {
+            if step.inv_mass[i] > 0.0 && delta[i] != Vec3::zeros() {
+                y[i] += delta[i];
+                w[i] = (y[i] - step.x0[i]) / step.h;
+            }
+        }
+        Some((y, w))
+    }
+
     fn resolve_collisions(
         &mut self,
         step: &StepData,

@@ -10,6 +10,7 @@
 pub mod assembly;
 pub mod cholesky;
 pub mod pattern;
+pub mod spread;
 mod tail;
 
 pub use assembly::StepInput;
@@ -82,6 +83,13 @@ impl ImplicitSystem {
 }
 
 impl ImplicitSystem {
+    /// The change of every node with the least δᵀAδ, A the matrix last factorised (the step's
+    /// system with its friction terms and pinned rows), that moves each node `at[k]` by `d[k]`
+    /// along `d[k]` (`spread`).
+    pub fn spread(&mut self, at: &[usize], d: &[Vec3]) -> Option<Vec<Vec3>> {
+        spread::spread(|b| self.chol.solve(b), self.pattern.nodes, at, d)
+    }
+
     /// Orders the unknowns of `nodes` (sorted: the cloth nodes of the step's contacts) last, so
     /// that the step's refactorisations for their friction and contact modes factorise their
     /// block alone (`solver::tail`); without contacts, or with more than `TAIL_FRACTION` of the
