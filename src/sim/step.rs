@@ -390,9 +390,6 @@ impl Simulation {
         x
     }
 
-    /// Makes the end positions collision-free (CCD and impact zones); nodes the projection moved
-    /// get the velocity of their new motion. Returns whether the iteration cap was hit with
-    /// collisions left.
     /// The collision stage on the end-of-step state `x`, `v` (`resolve_collisions`), with the
     /// smallest step's reverts (checks.rs, "Collisions left").
     fn collide(
@@ -449,6 +446,9 @@ impl Simulation {
         Some((y, w))
     }
 
+    /// Makes the end positions collision-free (CCD and impact zones); nodes the projection moved
+    /// get the velocity of their new motion. Returns whether the iteration cap was hit with
+    /// collisions left.
     fn resolve_collisions(
         &mut self,
         step: &StepData,
