@@ -33,9 +33,11 @@ def read_obj(path):
     return vs, vts, fs
 
 
-def stretches(path):
-    """(largest stretch − 1, material centroid) per face."""
+def stretches(path, uv_scale=1.0):
+    """(largest stretch − 1, material centroid) per face; the frame's `vt` times `uv_scale` are
+    its material coordinates in metres."""
     vs, vts, fs = read_obj(path)
+    vts = [(u * uv_scale, v * uv_scale) for u, v in vts]
     out = []
     for (a, ua), (b, ub), (c, uc) in fs:
         if max(ua, ub, uc) >= len(vts):
@@ -87,6 +89,24 @@ def handle_uvs(conf_path):
     return out
 
 
+def our_uv_scale(conf_path):
+    """Metres per unit of viewcloth's frame `vt`. viewcloth writes `vt` in the input mesh's
+    units; for a mesh without `vt` those are its positions before the cloth's transform, while
+    ARCSim's material coordinates (and its frames' `vt`) are the transformed positions: the
+    transform's scale then converts."""
+    try:
+        conf = json.loads(strip_comments(open(conf_path).read()))
+        root = os.path.dirname(os.path.dirname(os.path.abspath(conf_path)))
+        cloth = conf["cloths"][0]
+        _, vts, _ = read_obj(os.path.join(root, cloth["mesh"]))
+    except (OSError, KeyError, IndexError, ValueError):
+        return 1.0
+    if vts:
+        return 1.0
+    scale = cloth.get("transform", {}).get("scale", 1.0)
+    return float(scale) if isinstance(scale, (int, float)) else 1.0
+
+
 def frame_path(d, f, arcsim):
     return os.path.join(d, f"{f:04d}_00.obj" if arcsim else f"frame_{f:04d}.obj")
 
@@ -98,14 +118,14 @@ def faces(path):
         return sum(1 for line in f if line.startswith("f "))
 
 
-def max_stretch(d, frames, arcsim, handles, radius):
+def max_stretch(d, frames, arcsim, handles, radius, uv_scale=1.0):
     """Largest stretch − 1 over frames 10..frames, over all faces and away from handles."""
     worst_all = worst_away = None
     for f in range(10, frames + 1):
         p = frame_path(d, f, arcsim)
         if not os.path.exists(p):
             break
-        for s, c in stretches(p):
+        for s, c in stretches(p, uv_scale):
             worst_all = s if worst_all is None else max(worst_all, s)
             if all(math.dist(c, h) > radius for h in handles):
                 worst_away = s if worst_away is None else max(worst_away, s)
@@ -132,7 +152,7 @@ def main():
     marks = [1, 10, 25, frames]
     faces_ours = " / ".join(fmt(faces(frame_path(ours, f, False)) if f <= frames else None, "d") for f in marks)
     faces_arc = " / ".join(fmt(faces(frame_path(arc, f, True)) if f <= frames else None, "d") for f in marks)
-    s_ours = max_stretch(ours, frames, False, handles, radius)
+    s_ours = max_stretch(ours, frames, False, handles, radius, our_uv_scale(conf))
     s_arc = max_stretch(arc, frames, True, handles, radius)
     with open(check_log) as f:
         warnings = sum(1 for line in f if "warning" in line.lower())
