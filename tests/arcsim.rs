@@ -17,7 +17,7 @@ use nalgebra::{SMatrix, SVector};
 use viewcloth::collision::sdf::MeshSdf;
 use viewcloth::forces::bending::{bending, dihedral_angle, BendingRest};
 use viewcloth::forces::data_driven::{
-    bending_stiffness, measured_bending, measured_membrane, stretching_sample, HingeRest, MeasuredData,
+    bending_stiffness, measured_bending, measured_membrane, stretching_sample, FoldSign, HingeRest, MeasuredData,
     MeasuredMaterial,
 };
 use viewcloth::forces::membrane::{membrane, MembraneRest, MembraneStiffness};
@@ -468,11 +468,11 @@ fn measured_bending_with_constant_samples_is_a_potential() {
         let (rest, hr) = hinge_rest(&x);
         let what = format!("constant bending, θ-ish {theta}");
         check_fd(&what, &stack4(&x), 0.02, true, |y| {
-            measured_bending(&unstack4(y), &rest, &hr, &table, Projection::Exact)
+            measured_bending(&unstack4(y), &rest, &hr, &table, FoldSign::Absolute, Projection::Exact)
         });
         // ke ℓ²/(8A)(θ − θ̄)² is the dihedral kernel's ½ k_b 3ℓ²/A (θ − θ̄)² with k_b = ke/12.
         let (e0, g0, _) = bending(&x, &rest, 4e-4 / 12.0, Projection::Psd);
-        let (e1, g1, h1) = measured_bending(&x, &rest, &hr, &table, Projection::Psd);
+        let (e1, g1, h1) = measured_bending(&x, &rest, &hr, &table, FoldSign::Absolute, Projection::Psd);
         assert!((e0 - e1).abs() <= 1e-12 * e0 && max_abs(&(g0 - g1)) <= 1e-12 * max_abs(&g0));
         assert_psd(&what, &h1);
     }
@@ -487,11 +487,51 @@ fn measured_bending_jacobian_matches_finite_differences() {
         let value = angle * hr.curvature_per_angle * 0.1;
         assert!(value < 4.0 && (value - value.floor()) > 0.02, "probe on a sample curvature: {value}");
         check_fd("measured bending", &stack4(&x), 0.02, false, |y| {
-            measured_bending(&unstack4(y), &rest, &hr, &KNIT.bending, Projection::Exact)
+            measured_bending(&unstack4(y), &rest, &hr, &KNIT.bending, FoldSign::Absolute, Projection::Exact)
         });
-        let (_, _, h) = measured_bending(&x, &rest, &hr, &KNIT.bending, Projection::Psd);
+        let (_, _, h) = measured_bending(&x, &rest, &hr, &KNIT.bending, FoldSign::Absolute, Projection::Psd);
         assert_psd("measured bending PSD", &h);
     }
+}
+
+/// ARCSim 0.2.1 looks its bending table up by the signed curvature κ_A = θ_A ℓ/(A₁+A₂), θ_A = −θ
+/// (`FoldSign::Signed`): a fold with κ_A > 0 reads the table as the default |θ| rule does, one
+/// with κ_A < 0 extrapolates the first two samples linearly (clamped at zero). The signed rule's
+/// Jacobian matches finite differences on the extrapolated side.
+#[test]
+fn measured_bending_signed_reads_the_table_as_arcsim() {
+    let mut sides = [0, 0];
+    for theta in [0.5, -0.5, 1.1, -1.1] {
+        let x = hinge(theta);
+        let (rest, hr) = hinge_rest(&x);
+        let rest = BendingRest { theta0: 0.0, ..rest };
+        let t = dihedral_angle(&x.map(|p| V3([p.x, p.y, p.z])));
+        let kappa_a = -t * hr.curvature_per_angle;
+        // By hand: the table row at this edge's bias, its first two samples at κ = 0 and 10 m⁻¹.
+        let b = hr.bias[0];
+        assert!(b > 0.0 && b < 1.0, "bias {b} between the warp and the bias rows");
+        let row = |i: usize| KNIT.bending[0][i] * (1.0 - b) + KNIT.bending[1][i] * b;
+        let energy = |ke: Real| 0.25 * ke * rest.shape / 6.0 * t * t;
+        let (signed, _, _) = measured_bending(&x, &rest, &hr, &KNIT.bending, FoldSign::Signed, Projection::Psd);
+        let (absolute, _, _) = measured_bending(&x, &rest, &hr, &KNIT.bending, FoldSign::Absolute, Projection::Psd);
+        sides[usize::from(kappa_a < 0.0)] += 1;
+        if kappa_a > 0.0 {
+            assert!((signed - absolute).abs() <= 1e-12 * absolute, "θ_A > 0: {signed} vs {absolute}");
+        } else {
+            let want = (row(0) + (row(1) - row(0)) * kappa_a / 10.0).max(0.0);
+            assert!(
+                (signed - energy(want)).abs() <= 1e-12 * energy(want).max(1e-30),
+                "θ_A = {}: {signed} vs {}",
+                -t,
+                energy(want)
+            );
+            assert!((signed - absolute).abs() > 1e-3 * absolute, "the back fold reads the table as the front");
+            check_fd("signed measured bending", &stack4(&x), 0.02, false, |y| {
+                measured_bending(&unstack4(y), &rest, &hr, &KNIT.bending, FoldSign::Signed, Projection::Exact)
+            });
+        }
+    }
+    assert_eq!(sides, [2, 2], "folds to the front and to the back");
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -734,8 +774,8 @@ fn energy_only_is_the_kernels_energy_bit_for_bit() {
         let cases = [
             (bending(&h, &brest, 2e-5, Projection::Psd), bending(&h, &brest, 2e-5, Projection::EnergyOnly)),
             (
-                measured_bending(&h, &brest, &hr, &knit.bending, Projection::Psd),
-                measured_bending(&h, &brest, &hr, &knit.bending, Projection::EnergyOnly),
+                measured_bending(&h, &brest, &hr, &knit.bending, FoldSign::Absolute, Projection::Psd),
+                measured_bending(&h, &brest, &hr, &knit.bending, FoldSign::Absolute, Projection::EnergyOnly),
             ),
         ];
         for ((e, _, _), (e_only, g_only, h_only)) in cases {

@@ -218,6 +218,12 @@ fn cases() -> Vec<Case> {
             "invalid type",
         ),
         json(
+            "bending_curvature_without_a_measured_fabric",
+            rect.replace("\"preset\": \"cotton\"", "\"preset\": \"cotton\", \"bending_curvature\": \"signed\""),
+            Loc::Field("cloths[0].material.bending_curvature"),
+            "arcsim",
+        ),
+        json(
             "negative_density",
             rect.replace("\"preset\": \"cotton\"", "\"density\": -0.1"),
             Loc::Field("cloths[0].material.density"),

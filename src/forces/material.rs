@@ -48,7 +48,7 @@ impl Material {
     /// The bending kernel of this fabric for one hinge, weakened by its damage.
     pub fn bend(&self, x: &[Vec3; 4], hinge: &Hinge, proj: Projection) -> (Real, Vec12, Mat12) {
         let out = match &self.measured {
-            Some(m) => measured_bending(x, &hinge.rest, &hinge.measured, &m.bending, proj),
+            Some(m) => measured_bending(x, &hinge.rest, &hinge.measured, &m.bending, m.fold, proj),
             None => bending(x, &hinge.rest, self.bending, proj),
         };
         weaken(out, hinge.weakened)

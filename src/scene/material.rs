@@ -58,6 +58,12 @@ pub fn resolve(spec: &MaterialSpec) -> Result<Material, (&'static str, String)> 
     if let Some(d) = positive("density", spec.density)? {
         m.density = d;
     }
+    if spec.bending_curvature.is_some() {
+        return Err((
+            "bending_curvature",
+            "no bending_curvature without \"arcsim\" (it chooses how a measured bending table is read)".into(),
+        ));
+    }
     let iso = [spec.youngs_modulus, spec.poisson_ratio, spec.thickness];
     let ortho = [spec.warp, spec.weft, spec.shear, spec.coupling];
     if iso.iter().any(Option::is_some) {

@@ -9,7 +9,7 @@ use serde::Deserialize;
 
 use super::spec::MaterialSpec;
 use crate::error::InputError;
-use crate::forces::data_driven::{MeasuredData, MeasuredMaterial};
+use crate::forces::data_driven::{FoldSign, MeasuredData, MeasuredMaterial};
 use crate::forces::material::Material;
 use crate::forces::membrane::MembraneStiffness;
 
@@ -84,7 +84,12 @@ pub(super) fn resolve_measured(spec: &MaterialSpec, data: &MeasuredData) -> Resu
         Some(d) if d >= 0.0 && d.is_finite() => d,
         Some(d) => return Err(("damping", format!("a number ≥ 0, got {d}"))),
     };
-    let measured = MeasuredMaterial::new(data, stretching, bending);
+    let mut measured = MeasuredMaterial::new(data, stretching, bending);
+    measured.fold = match spec.bending_curvature.as_deref() {
+        None | Some("absolute") => FoldSign::Absolute,
+        Some("signed") => FoldSign::Signed,
+        Some(other) => return Err(("bending_curvature", format!("\"absolute\" or \"signed\", got \"{other}\""))),
+    };
     // The linear fields describe the small-strain slope, for anything that wants a summary.
     let k = measured.stretching.stiffness(0.0, 0.0, 0.0).0;
     Ok(Material {

@@ -325,6 +325,10 @@ pub struct MaterialSpec {
     /// With `arcsim`: multiplies density, stretching and bending together (ARCSim).
     #[serde(default)]
     pub thicken: Option<f64>,
+    /// With `arcsim`: `"absolute"` (default: folds towards either side alike) or `"signed"`
+    /// (ARCSim 0.2.1's lookup of the bending table by signed curvature).
+    #[serde(default)]
+    pub bending_curvature: Option<String>,
     /// Bending plasticity: the yield curvature (1/m); absent = elastic.
     #[serde(default)]
     pub yield_curv: Option<f64>,

@@ -123,6 +123,8 @@ impl Conv<'_> {
                         fields.push((key, J::Num(x)));
                     }
                 }
+                // ARCSim reads the bending table by signed curvature (`FoldSign::Signed`).
+                fields.push(("bending_curvature", J::Str("signed".into())));
             }
             None => {
                 // ARCSim's isotropic material: density in kg/m³, E in Pa, bending E t³/(12(1 − ν²)).
