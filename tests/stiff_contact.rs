@@ -67,15 +67,8 @@ fn a_foil_strip_pushed_end_on_by_a_wall_buckles_without_stopping_the_run() {
     // wall's face then at 98.5 mm) and its middle bows out of the plane; the energy of its
     // compression went into bending (a flat strip shortened by 1.5 mm would hold
     // ½·(E·t·w/L)·δ² = 0.2 J).
-    let last = std::fs::read_to_string(out.join(format!("frame_{FRAMES:04}.obj"))).unwrap();
-    let x: Vec<[Real; 3]> = last
-        .lines()
-        .filter_map(|l| l.strip_prefix("v "))
-        .map(|l| {
-            let c: Vec<Real> = l.split_whitespace().map(|c| c.parse().unwrap()).collect();
-            [c[0], c[1], c[2]]
-        })
-        .collect();
+    let last = viewcloth::io::obj::read_obj(&out.join(format!("frame_{FRAMES:04}.obj"))).unwrap();
+    let x: Vec<[Real; 3]> = last.positions.iter().map(|p| [p.x, p.y, p.z]).collect();
     let x_max = x.iter().map(|p| p[0]).fold(Real::MIN, Real::max);
     let bow = x.iter().map(|p| p[2].abs()).fold(0.0, Real::max);
     assert!(x_max < 0.0985, "the right end at {x_max} m, inside the wall's thickness band");
