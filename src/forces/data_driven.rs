@@ -29,8 +29,9 @@
 //! force is ke ℓ²/(4(A₁+A₂)) (θ − θ̄) ∂θ/∂x). ARCSim uses the signed angle for κ, so a fold
 //! towards the back extrapolates below the first sample; this module uses |θ| by default, so
 //! that both fold directions are equally stiff, and ARCSim's signed rule with `FoldSign::Signed`
-//! (the material's `bending_curvature: "signed"`, which converted ARCSim confs get). As for stretching: energy at the current ke, gradient as
-//! ARCSim's force, `Exact` with ∂ke/∂θ, `Psd` the Gauss–Newton form.
+//! (the material's `bending_curvature: "signed"`, which converted ARCSim confs get). As for
+//! stretching: energy at the current ke, gradient as ARCSim's force, `Exact` with ∂ke/∂θ, `Psd`
+//! the Gauss–Newton form.
 
 use crate::math::dual::V3;
 use crate::math::{pos_part2, Mat12, Mat2, Mat3, Real, Vec12, Vec2, Vec3, Vec9};
