@@ -14,6 +14,7 @@ use std::process::Command;
 use common::fd::{fd_errors, max_abs, FdErrors};
 use common::{temp_dir, Rng};
 use nalgebra::{SMatrix, SVector};
+use viewcloth::collision::proximity::Law;
 use viewcloth::collision::sdf::MeshSdf;
 use viewcloth::forces::bending::{bending, dihedral_angle, BendingRest};
 use viewcloth::forces::data_driven::{
@@ -98,10 +99,11 @@ fn confs_read_as_arcsim_reads_them() {
     let square = conf("square.json");
     assert_eq!(square.scene.frames, 325);
     assert_eq!(square.scene.collision.thickness, 1e-3, "ARCSim's default repulsion thickness");
-    // ARCSim's cubic penalty K·a·v³/(6τ) and the quadratic ½·k·a·v² store the same energy at
-    // one thickness when k = K/3: ARCSim's default K = 1e9 here, the conf's own 1e6 on sphere.
-    assert_eq!(square.scene.collision.stiffness, 1e9 / 3.0);
-    assert_eq!(s.collision.stiffness, 1e6 / 3.0);
+    // ARCSim's own cubic penalty K·a·v³/(6τ): ARCSim's default K = 1e9 here, the conf's own 1e6
+    // on sphere.
+    assert_eq!(square.scene.collision.stiffness, 1e9);
+    assert_eq!(s.collision.stiffness, 1e6);
+    assert_eq!((square.scene.collision.penalty, s.collision.penalty), (Law::Cubic, Law::Cubic));
     assert!(square.scene.collision.self_collision, "ARCSim's cloth–cloth contact is on without obstacles too");
     assert!(square.warnings.is_empty(), "{:?}", square.warnings);
 
