@@ -24,7 +24,9 @@ pub enum Law {
     #[default]
     Quadratic,
     /// E = k d³/(6 τ), τ the thickness: ARCSim 0.2.1's, k = stiffness × the smaller of the two
-    /// elements' areas (`proximity.cpp`, `make_constraint`).
+    /// elements' areas (`proximity.cpp`, `make_constraint`). Deeper than one thickness (cloth
+    /// through the other surface, which only a start inside an obstacle brings here) the force
+    /// goes on along its tangent at τ: k τ/2 + k (d − τ).
     Cubic,
 }
 
@@ -38,9 +40,21 @@ impl Law {
         }
         match self {
             Law::Quadratic => (0.5 * k * d * d, k * d, k),
-            Law::Cubic => {
+            Law::Cubic if d <= thickness => {
                 let s = k / thickness;
                 (s * d * d * d / 6.0, 0.5 * s * d * d, s * d)
+            }
+            Law::Cubic => {
+                // Past the thickness the cloth is through the other surface, which ARCSim's
+                // collision stage never leaves at a step's start; here cloth that starts inside
+                // an obstacle does. The cubic's growth would fling it (force ∝ d²); its tangent
+                // at one thickness continues instead: C¹ in the force, stiffness k.
+                let e = d - thickness;
+                (
+                    k * thickness * thickness / 6.0 + 0.5 * k * thickness * e + 0.5 * k * e * e,
+                    0.5 * k * thickness + k * e,
+                    k,
+                )
             }
         }
     }
@@ -282,6 +296,19 @@ mod tests {
         let xe = [v(-1.0, 0.2, 0.003), v(1.0, 0.3, 0.004), v(0.1, -1.0, -0.002), v(-0.2, 1.0, 0.0)];
         let ce = Contact { law: Law::Cubic, ..edge_edge_contact([4, 5, 6, 7], &xe, 0.01, 5e2).unwrap() };
         check_fd(&ce, &xe);
+        // Through the face (depth 1.5 τ): the tangent at one thickness goes on, so a node that
+        // starts inside an obstacle is not flung by a force growing with d².
+        let through = [v(0.2, 0.3, -0.005), x[1], x[2], x[3]];
+        check_fd(&c, &through);
+        let (_, force, k) = c.penalty(-0.015);
+        assert!((force - 1e3 * (0.01 / 2.0 + 0.005)).abs() < 1e-12 && (k - 1e3).abs() < 1e-9, "{force} {k}");
+        // Continuous across the thickness in energy, force and stiffness (2e-12 apart: within
+        // what the force and the stiffness change over that span).
+        let (below, above) = (c.penalty(-0.01 + 1e-12), c.penalty(-0.01 - 1e-12));
+        assert!(
+            (below.0 - above.0).abs() < 2e-11 && (below.1 - above.1).abs() < 2e-8 && (below.2 - above.2).abs() < 1e-6,
+            "{below:?} {above:?}"
+        );
     }
 
     #[test]
