@@ -85,18 +85,14 @@ fn gap(frame: &FrictionFrame, c: &Contact, v: &[Vec3]) -> Real {
 }
 
 /// The rate n · Σ wᵢ uᵢ at which `c`'s gap opens at the start velocities (uᵢ the cloth's v₀ and
-/// the obstacle points' velocities over the step): the relative normal speed.
-fn normal_speed(frame: &FrictionFrame, c: &Contact) -> Real {
-    let rate: Vec3 = (0..4).map(|j| c.w[j] * frame.point(c.nodes[j], frame.v0).1).sum();
-    c.n.dot(&rate)
-}
-
-/// The part of `normal_speed` the obstacle's points contribute: the rate at which the gap opens
-/// with the cloth held still.
-fn obstacle_normal_speed(frame: &FrictionFrame, c: &Contact) -> Real {
+/// the obstacle points' velocities over the step): the relative normal speed; with
+/// `obstacle_only`, the obstacle points' part alone (the gap's rate with the cloth held still).
+fn normal_speed(frame: &FrictionFrame, c: &Contact, obstacle_only: bool) -> Real {
     let cloth = frame.x0.len();
-    let rate: Vec3 =
-        (0..4).filter(|&j| c.nodes[j] >= cloth).map(|j| c.w[j] * frame.point(c.nodes[j], frame.v0).1).sum();
+    let rate: Vec3 = (0..4)
+        .filter(|&j| !obstacle_only || c.nodes[j] >= cloth)
+        .map(|j| c.w[j] * frame.point(c.nodes[j], frame.v0).1)
+        .sum();
     c.n.dot(&rate)
 }
 
@@ -114,9 +110,9 @@ impl Speculative {
                 let (g0, g1) = (gap(frame, &contact, &rest), gap(frame, &contact, frame.v0));
                 // g0 holds the cloth still against the obstacle at the end of the step; ARCSim
                 // linearises with the obstacle still at the start too.
-                let g_start = g0 - frame.h * obstacle_normal_speed(frame, &contact);
+                let g_start = g0 - frame.h * normal_speed(frame, &contact, true);
                 let g_lin = if g_start < 0.0 { g_start } else { g1 };
-                let leaving = frame.h * normal_speed(frame, &contact) > LEAVING * contact.thickness;
+                let leaving = frame.h * normal_speed(frame, &contact, false) > LEAVING * contact.thickness;
                 let held = g0 < 0.0 && (hold_inside || leaving);
                 Item { contact, active: g0 < 0.0 || g1 < 0.0, g_lin, held }
             })
