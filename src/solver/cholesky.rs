@@ -9,9 +9,10 @@
 use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, simplicial, supernodal, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
+    factorize_symbolic_cholesky, supernodal, CholeskySymbolicParams, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
     SymmetricOrdering,
 };
+use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Conj, MatMut, Par, Side};
 
@@ -29,8 +30,7 @@ pub enum SolveError {
 /// A symbolic factorisation of one sparsity pattern, refactorised numerically every step.
 pub struct Cholesky {
     symbolic: SymbolicCholesky<usize>,
-    /// P A Pᵀ in the triangle the numeric kernel reads (lower for supernodal, upper for
-    /// simplicial), columns not sorted.
+    /// P A Pᵀ in the lower triangle the supernodal kernel reads, columns not sorted.
     perm_col_ptr: Vec<usize>,
     perm_row_idx: Vec<usize>,
     /// For each stored entry of P A Pᵀ, the `ScalarCsc::src` of the A entry it holds.
@@ -45,9 +45,9 @@ impl Cholesky {
     /// Analyses the pattern (fill-reducing AMD ordering, elimination tree, supernodes).
     pub fn analyse(csc: &ScalarCsc) -> Result<Self, SolveError> {
         let sym = SymbolicSparseColMatRef::new_checked(csc.dim, csc.dim, &csc.col_ptr, None, &csc.row_idx);
-        let symbolic = factorize_symbolic_cholesky(sym, Side::Lower, Default::default(), Default::default())
+        let symbolic = factorize_symbolic_cholesky(sym, Side::Lower, Default::default(), symbolic_params())
             .map_err(|e| SolveError::Symbolic(format!("{e:?}")))?;
-        Ok(Self::with_symbolic(csc, symbolic))
+        Self::with_symbolic(csc, symbolic)
     }
 
     /// The fill-reducing order of the analysis (new position → unknown).
@@ -59,8 +59,7 @@ impl Cholesky {
     }
 
     /// Analyses the pattern in the order `fwd` (new position → unknown) whose last `tail`
-    /// unknowns form the block refactorised alone (`solver::tail`; none when the analysis picks
-    /// the simplicial kernel, for small systems).
+    /// unknowns form the block refactorised alone (`solver::tail`).
     pub fn analyse_ordered(csc: &ScalarCsc, fwd: &[usize], tail: usize) -> Result<Self, SolveError> {
         let n = csc.dim;
         let mut inv = vec![0; n];
@@ -70,28 +69,33 @@ impl Cholesky {
         let perm = faer::perm::PermRef::new_checked(fwd, &inv, n);
         let sym = SymbolicSparseColMatRef::new_checked(n, n, &csc.col_ptr, None, &csc.row_idx);
         let symbolic =
-            factorize_symbolic_cholesky(sym, Side::Lower, SymmetricOrdering::Custom(perm), Default::default())
+            factorize_symbolic_cholesky(sym, Side::Lower, SymmetricOrdering::Custom(perm), symbolic_params())
                 .map_err(|e| SolveError::Symbolic(format!("{e:?}")))?;
-        let mut chol = Self::with_symbolic(csc, symbolic);
+        let mut chol = Self::with_symbolic(csc, symbolic)?;
         if let (SymbolicCholeskyRaw::Supernodal(s), true) = (chol.symbolic.raw(), tail > 0) {
             chol.tail = Some(Tail::new(s, &chol.perm_col_ptr, &chol.perm_row_idx, n - tail)?);
         }
         Ok(chol)
     }
 
-    fn with_symbolic(csc: &ScalarCsc, symbolic: SymbolicCholesky<usize>) -> Self {
-        let (perm_col_ptr, perm_row_idx, value_src) = permuted_pattern(&symbolic, csc);
-        let factor_req = match symbolic.raw() {
-            SymbolicCholeskyRaw::Simplicial(_) => {
-                simplicial::factorize_simplicial_numeric_llt_scratch::<usize, f64>(csc.dim)
-            }
-            SymbolicCholeskyRaw::Supernodal(s) => {
-                supernodal::factorize_supernodal_numeric_llt_scratch::<usize, f64>(s, Par::Seq, Default::default())
-            }
+    fn with_symbolic(csc: &ScalarCsc, symbolic: SymbolicCholesky<usize>) -> Result<Self, SolveError> {
+        let SymbolicCholeskyRaw::Supernodal(s) = symbolic.raw() else {
+            return Err(SolveError::Symbolic("the analysis is not supernodal".into()));
         };
+        let factor_req =
+            supernodal::factorize_supernodal_numeric_llt_scratch::<usize, f64>(s, Par::Seq, Default::default());
+        let (perm_col_ptr, perm_row_idx, value_src) = permuted_pattern(&symbolic, csc);
         let req = factor_req.or(symbolic.solve_in_place_scratch::<f64>(1, Par::Seq));
         let l_values = vec![0.0; symbolic.len_val()];
-        Cholesky { symbolic, perm_col_ptr, perm_row_idx, value_src, l_values, buffer: MemBuffer::new(req), tail: None }
+        Ok(Cholesky {
+            symbolic,
+            perm_col_ptr,
+            perm_row_idx,
+            value_src,
+            l_values,
+            buffer: MemBuffer::new(req),
+            tail: None,
+        })
     }
 
     /// For each value the numeric factorisation takes (`factor`), the `ScalarCsc::src` of the
@@ -109,20 +113,18 @@ impl Cholesky {
         let a = SparseColMatRef::new(sym, values);
         let stack = MemStack::new(&mut self.buffer);
         let reg = LltRegularization::default();
-        match self.symbolic.raw() {
-            SymbolicCholeskyRaw::Simplicial(s) => {
-                simplicial::factorize_simplicial_numeric_llt(&mut self.l_values, a, reg, s, stack)
-            }
-            SymbolicCholeskyRaw::Supernodal(s) => supernodal::factorize_supernodal_numeric_llt(
-                &mut self.l_values,
-                a,
-                reg,
-                s,
-                Par::Seq,
-                stack,
-                Default::default(),
-            ),
-        }
+        let SymbolicCholeskyRaw::Supernodal(s) = self.symbolic.raw() else {
+            return Err(SolveError::Symbolic("the analysis is not supernodal".into()));
+        };
+        supernodal::factorize_supernodal_numeric_llt(
+            &mut self.l_values,
+            a,
+            reg,
+            s,
+            Par::Seq,
+            stack,
+            Default::default(),
+        )
         .map(|_| ())
         .map_err(|e| SolveError::NotPositiveDefinite(format!("{e:?}")))?;
         if let Some(t) = &mut self.tail {
@@ -155,22 +157,31 @@ impl Cholesky {
     }
 }
 
+/// The analysis always picks faer's supernodal kernel. faer's default chooses the scalar
+/// simplicial kernel when the factor's flops per nonzero are low, which cloth systems of a few
+/// hundred to a thousand nodes are (planar meshes, little fill); but their unknowns come in 3×3
+/// node blocks, so every supernode has at least three columns and the blocked kernel wins there
+/// too. Measured (issue 17, one thread, same sitting): ARCSim's square.json, 325 frames at ~286
+/// faces, factorisation 1.49 → 0.60 s of the run; sphere.json's frames of 800–1,100 faces
+/// 2.5 → 1.0 ms per factorisation. Above that faer picked the supernodal kernel already.
+pub(super) fn symbolic_params() -> CholeskySymbolicParams<'static> {
+    CholeskySymbolicParams {
+        supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
+        ..Default::default()
+    }
+}
+
 /// P A Pᵀ's pattern exactly as faer's `factorize_numeric_llt` lays it out (a counting sort
 /// over the columns of A in order, as `faer::sparse::utils::permute_self_adjoint_to_unsorted`),
 /// each entry tagged with the `src` of the A entry it takes its value from.
 fn permuted_pattern(symbolic: &SymbolicCholesky<usize>, csc: &ScalarCsc) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
     let n = csc.dim;
-    let lower_out = matches!(symbolic.raw(), SymbolicCholeskyRaw::Supernodal(_));
     let identity: Vec<usize> = (0..n).collect();
     let perm_inv = symbolic.perm().map(|p| p.arrays().1).unwrap_or(&identity);
-    // Destination (column, row) of A's lower entry (i, j) in the output triangle.
+    // Destination (column, row) of A's lower entry (i, j) in the output's lower triangle.
     let dest = |i: usize, j: usize| {
         let (pi, pj) = (perm_inv[i], perm_inv[j]);
-        if (pi >= pj) == lower_out {
-            (pj, pi)
-        } else {
-            (pi, pj)
-        }
+        (pi.min(pj), pi.max(pj))
     };
     let mut col_ptr = vec![0; n + 1];
     for j in 0..n {
@@ -221,15 +232,16 @@ pub(crate) mod tests {
     }
 
     /// Writing the values pre-permuted gives the factor faer's own `factorize_numeric_llt` gives,
-    /// bit for bit, on both of faer's numeric paths.
+    /// bit for bit, on the supernodal path (the one the analysis keeps, small systems included).
+    /// A simplicial analysis is refused, not factorised wrongly.
     #[test]
     fn prepermuted_factor_matches_faer_bitwise() {
-        let (csc, by_src) = spd_system(9, 7);
-        let a: Vec<f64> = csc.src.iter().map(|&s| by_src[s]).collect();
-        let sym = SymbolicSparseColMatRef::new_checked(csc.dim, csc.dim, &csc.col_ptr, None, &csc.row_idx);
-        for threshold in [SupernodalThreshold::FORCE_SIMPLICIAL, SupernodalThreshold::FORCE_SUPERNODAL] {
-            let params = CholeskySymbolicParams { supernodal_flop_ratio_threshold: threshold, ..Default::default() };
-            let symbolic = factorize_symbolic_cholesky(sym, Side::Lower, Default::default(), params).unwrap();
+        for (nx, ny) in [(9, 7), (2, 2)] {
+            let (csc, by_src) = spd_system(nx, ny);
+            let a: Vec<f64> = csc.src.iter().map(|&s| by_src[s]).collect();
+            let sym = SymbolicSparseColMatRef::new_checked(csc.dim, csc.dim, &csc.col_ptr, None, &csc.row_idx);
+            let symbolic =
+                factorize_symbolic_cholesky(sym, Side::Lower, Default::default(), symbolic_params()).unwrap();
             let mut reference = vec![0.0; symbolic.len_val()];
             let req = symbolic.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default());
             symbolic
@@ -243,12 +255,20 @@ pub(crate) mod tests {
                     Default::default(),
                 )
                 .unwrap();
-            let mut chol = Cholesky::with_symbolic(&csc, symbolic);
+            let mut chol = Cholesky::with_symbolic(&csc, symbolic).unwrap();
             let values: Vec<f64> = chol.value_sources().iter().map(|&s| by_src[s]).collect();
             chol.factor(&values).unwrap();
             assert!(reference.iter().any(|&x| x != 0.0));
             let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
-            assert_eq!(bits(&chol.l_values), bits(&reference), "{threshold:?}");
+            assert_eq!(bits(&chol.l_values), bits(&reference), "{nx}×{ny}");
         }
+        let (csc, _) = spd_system(9, 7);
+        let sym = SymbolicSparseColMatRef::new_checked(csc.dim, csc.dim, &csc.col_ptr, None, &csc.row_idx);
+        let params = CholeskySymbolicParams {
+            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SIMPLICIAL,
+            ..Default::default()
+        };
+        let simplicial = factorize_symbolic_cholesky(sym, Side::Lower, Default::default(), params).unwrap();
+        assert!(matches!(Cholesky::with_symbolic(&csc, simplicial), Err(SolveError::Symbolic(_))));
     }
 }

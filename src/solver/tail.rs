@@ -26,10 +26,8 @@ use faer::linalg::cholesky::llt::factor::LltRegularization;
 use faer::linalg::matmul::matmul;
 use faer::sparse::linalg::cholesky::supernodal::SymbolicSupernodalCholesky;
 use faer::sparse::linalg::cholesky::{
-    factorize_symbolic_cholesky, supernodal, CholeskySymbolicParams, SymbolicCholesky, SymbolicCholeskyRaw,
-    SymmetricOrdering,
+    factorize_symbolic_cholesky, supernodal, SymbolicCholesky, SymbolicCholeskyRaw, SymmetricOrdering,
 };
-use faer::sparse::linalg::SupernodalThreshold;
 use faer::sparse::{SparseColMatRef, SymbolicSparseColMatRef};
 use faer::{Accum, Mat, Par, Side};
 
@@ -143,12 +141,13 @@ impl Tail {
         let identity: Vec<usize> = (0..dim).collect();
         let perm = faer::perm::PermRef::new_checked(&identity, &identity, dim);
         let sym = SymbolicSparseColMatRef::new_checked(dim, dim, &col_ptr, None, &row_idx);
-        let params = CholeskySymbolicParams {
-            supernodal_flop_ratio_threshold: SupernodalThreshold::FORCE_SUPERNODAL,
-            ..Default::default()
-        };
-        let symbolic = factorize_symbolic_cholesky(sym, Side::Lower, SymmetricOrdering::Custom(perm), params)
-            .map_err(|e| SolveError::Symbolic(format!("{e:?} (tail block)")))?;
+        let symbolic = factorize_symbolic_cholesky(
+            sym,
+            Side::Lower,
+            SymmetricOrdering::Custom(perm),
+            super::cholesky::symbolic_params(),
+        )
+        .map_err(|e| SolveError::Symbolic(format!("{e:?} (tail block)")))?;
         let SymbolicCholeskyRaw::Supernodal(s) = symbolic.raw() else {
             return Err(SolveError::Symbolic("the tail block's analysis is not supernodal".into()));
         };
