@@ -165,6 +165,9 @@ fn collapse_all(w: &mut Work, guard: &mut Guard, limits: &RemeshLimits, stats: &
                 continue;
             }
             for (i, j) in [(a, b), (b, a)] {
+                if !ops::collapse_fits(w, i, j, COLLAPSE_MAX_LENGTH) {
+                    continue;
+                }
                 let Some(op) = ops::collapse(w, i, j) else { continue };
                 if ops::collapse_ok(w, &op, limits.aspect_min, COLLAPSE_MAX_LENGTH, floor)
                     && apply_guarded(w, guard, &op)

@@ -252,6 +252,18 @@ fn line_partners(w: &Work, i: usize, j: usize) -> Option<Vec<(usize, usize)>> {
     Some(merged)
 }
 
+/// Whether collapsing vert `i` into `j` keeps every edge it creates, j to the other corners of
+/// i's faces without j, within `max_len` in the metric: a necessary condition of `collapse_ok`
+/// (which checks those edges among others), cheap enough to reject most candidates before
+/// `collapse` builds the operation and checks its topology.
+pub fn collapse_fits(w: &Work, i: usize, j: usize, max_len: Real) -> bool {
+    w.vfaces[i]
+        .iter()
+        .map(|&f| w.faces[f])
+        .filter(|t| !t.contains(&j))
+        .all(|t| t.iter().all(|&k| k == i || w.metric_length(j, k) <= max_len))
+}
+
 /// Triangle aspect ratio 12√3·A/P² (1 for equilateral) in material space.
 pub fn aspect(u: [Vec2; 3]) -> Real {
     let area = 0.5 * cross2(&(u[1] - u[0]), &(u[2] - u[0]));
