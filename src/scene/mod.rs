@@ -127,6 +127,8 @@ pub struct Scene {
     pub camera: Option<Camera>,
     /// Stages the scene switches off (`disable`).
     pub disabled: Disabled,
+    /// Relax the initial state before frame 0 (`initial_relax`; `Simulation::new`).
+    pub initial_relax: bool,
 }
 
 /// Stages a scene switches off (its `disable` list, ARCSim's names). Remeshing, strain limiting,

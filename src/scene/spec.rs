@@ -58,6 +58,10 @@ pub struct SceneSpec {
     /// `remeshing`, `separation`, `pop_filter`, `plasticity` (ARCSim's `disable`).
     #[serde(default)]
     pub disable: Vec<String>,
+    /// Relax the initial state towards its elastic equilibrium before frame 0, remeshing between
+    /// two relaxations, as ARCSim does before every run (`sim::pop`, `equilibrate`); default false.
+    #[serde(default)]
+    pub initial_relax: Option<bool>,
 }
 
 /// One instance: the cloths and obstacles of the scene file `scene` (nothing else of it), named

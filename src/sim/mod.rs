@@ -78,7 +78,33 @@ impl Simulation {
         let (pushed, deep) = sim.push_out(tolerance)?;
         sim.state.pushed_out = pushed;
         sim.state.separating = deep > 0;
+        if sim.scene.initial_relax {
+            sim.relax_initial_state()?;
+        }
         Ok(sim)
+    }
+
+    /// ARCSim's `relax_initial_state`: equilibrate, remesh adaptively (its initialising remesh),
+    /// equilibrate again (`pop::equilibrate`). The remesh's counts join frame 1's.
+    fn relax_initial_state(&mut self) -> Result<(), SimError> {
+        let Some(first) = self.equilibrate()? else { return Ok(()) };
+        let adaptive = self.scene.cloths.iter().any(|c| c.remesh.as_ref().is_some_and(|r| r.mode.is_adaptive()));
+        let mut iterations = first.iterations;
+        if adaptive {
+            self.remesh_counted()?;
+            iterations += self.equilibrate()?.map_or(0, |s| s.iterations);
+        }
+        self.ws.pop.iterations += iterations;
+        Ok(())
+    }
+
+    /// An adaptive remesh whose operation counts join the next frame's statistics.
+    pub(super) fn remesh_counted(&mut self) -> Result<(), SimError> {
+        let s = self.remesh(RemeshMode::Adaptive)?;
+        self.ws.remesh_stats.splits += s.splits;
+        self.ws.remesh_stats.flips += s.flips;
+        self.ws.remesh_stats.collapses += s.collapses;
+        Ok(())
     }
 
     /// A simulation of `scene` (as loaded from its file) at a checkpointed state.

@@ -45,6 +45,9 @@ use super::{SimError, Simulation};
 /// μ, the rubber band to the pre-filter positions (N/m per node; ARCSim's default
 /// regularisation, `popfilter.hpp`).
 pub const RUBBER_BAND: Real = 1e3;
+/// μ of the initial equilibration (`Simulation::equilibrate`; ARCSim's `equilibration_step`
+/// passes a regularisation of 1).
+pub const EQUILIBRATION_BAND: Real = 1.0;
 /// Newton steps at most (ARCSim's).
 pub const ITERATIONS: usize = 10;
 /// Newton stops once no node moves farther than this in a step (m; ARCSim's `eps_x`, there on
@@ -66,6 +69,15 @@ pub struct PopStats {
     pub max_move: Real,
 }
 
+/// The linear term of the objective.
+#[derive(Clone, Copy)]
+enum Load {
+    /// f_ext − m a₀ (the pop filter).
+    External,
+    /// None (the initial equilibration: ARCSim zeroes the accelerations and leaves gravity out).
+    None,
+}
+
 /// The objective's fixed parts.
 struct Objective<'a> {
     elastic: Elastic<'a>,
@@ -75,6 +87,8 @@ struct Objective<'a> {
     x0: &'a [Vec3],
     /// f_ext − m a₀ per node (zero for held nodes).
     load: &'a [Vec3],
+    /// μ, the rubber band to x₀ (N/m per node).
+    mu: Real,
 }
 
 impl Objective<'_> {
@@ -85,7 +99,7 @@ impl Objective<'_> {
         let mut linear = 0.0;
         for ((x, x0), load) in x.iter().zip(self.x0).zip(self.load) {
             let d = x - x0;
-            linear += 0.5 * RUBBER_BAND * d.norm_squared() - load.dot(&d);
+            linear += 0.5 * self.mu * d.norm_squared() - load.dot(&d);
         }
         potential + linear
     }
@@ -99,6 +113,29 @@ impl Simulation {
         if disabled.pop_filter || disabled.physics || self.state.steps == 0 || self.state.separating {
             return Ok(None);
         }
+        self.relax(RUBBER_BAND, Load::External).map(Some)
+    }
+
+    /// ARCSim's equilibration of the initial state (`relax_initial_state`, its
+    /// `equilibration_step`): the pop filter's minimisation with every acceleration zero, no
+    /// external load and a weak band, μ = `EQUILIBRATION_BAND`, so that a mesh given strained
+    /// (garment panels stretched around a body towards their seams, a folded paper model whose
+    /// folds are not isometric to its flat pattern) starts near its elastic equilibrium instead
+    /// of snapping there, and buckling, in the first steps. Where viewcloth differs from ARCSim:
+    /// handles hold their nodes and repulsion contacts are in the objective (ARCSim leaves both
+    /// out and resolves collisions after); the motion is swept by the collision stage as the pop
+    /// filter's is. Not while the separation stage is to walk cloth out of obstacles, nor with
+    /// the physics stage off.
+    pub(super) fn equilibrate(&mut self) -> Result<Option<PopStats>, SimError> {
+        if self.scene.disabled.physics || self.state.separating {
+            return Ok(None);
+        }
+        self.relax(EQUILIBRATION_BAND, Load::None).map(Some)
+    }
+
+    /// Minimises E(x) + Σᵢ −loadᵢ · (xᵢ − x₀ᵢ) + μ/2 Σᵢ |xᵢ − x₀ᵢ|² by Newton's method with a
+    /// line search (module doc), then sweeps the motion through the collision stage.
+    fn relax(&mut self, mu: Real, load: Load) -> Result<PopStats, SimError> {
         let clock = Instant::now();
         let t = self.state.time;
         let held = self.held(t)?;
@@ -122,7 +159,10 @@ impl Simulation {
             // A prescribed velocity equal to the current one: the node's change is zero.
             pinned[n] = Some(nodes[n].v);
         }
-        let load = self.pop_load(&pinned);
+        let load = match load {
+            Load::External => self.pop_load(&pinned),
+            Load::None => vec![Vec3::zeros(); x0.len()],
+        };
         let fixed: Vec<Vec3> = self.ws.collisions.as_ref().map(|w| w.obs_x1.clone()).unwrap_or_default();
         let mut stats = PopStats::default();
         let mut x = x0.clone();
@@ -136,6 +176,7 @@ impl Simulation {
             springs: &held.springs,
             x0: &x0,
             load: &load,
+            mu,
         };
         let mut value = objective.value(&x);
         let mut timing = SolveTiming::default();
@@ -143,7 +184,7 @@ impl Simulation {
         // steps are small); a step it does not make descend is taken again with a new factor.
         let mut refactor = true;
         for _ in 0..ITERATIONS {
-            let rhs: Vec<Vec3> = (0..x.len()).map(|i| load[i] - RUBBER_BAND * (x[i] - x0[i])).collect();
+            let rhs: Vec<Vec3> = (0..x.len()).map(|i| load[i] - mu * (x[i] - x0[i])).collect();
             let input = StepInput {
                 mesh: &at_x,
                 rest,
@@ -156,7 +197,7 @@ impl Simulation {
                 contacts: &contacts,
                 fixed: &fixed,
             };
-            self.ws.system.assemble_static(&input, RUBBER_BAND, &rhs);
+            self.ws.system.assemble_static(&input, mu, &rhs);
             let dx = self
                 .ws
                 .system
@@ -193,7 +234,7 @@ impl Simulation {
         if stats.max_move > 0.0 && self.ws.collisions.is_some() && !self.scene.disabled.collision {
             self.sweep_pop(&x0, &pinned);
         }
-        Ok(Some(stats))
+        Ok(stats)
     }
 
     /// f_ext − m a₀ per free node: gravity and wind at the current state, less the force the

@@ -40,7 +40,8 @@ fn hanging_still() -> (Simulation, Vec<Vec3>) {
 fn objective_gradient(sim: &Simulation, x0: &[Vec3]) -> Vec<Vec3> {
     let pinned: Vec<Option<Vec3>> = vec![None; x0.len()];
     let load = sim.pop_load(&pinned);
-    let objective = Objective { elastic: sim.elastic(), contacts: &[], fixed: &[], springs: &[], x0, load: &load };
+    let objective =
+        Objective { elastic: sim.elastic(), contacts: &[], fixed: &[], springs: &[], x0, load: &load, mu: RUBBER_BAND };
     let x = sim.state.mesh.positions();
     let delta = 1e-6;
     let mut grad = vec![Vec3::zeros(); x.len()];
@@ -114,4 +115,45 @@ fn switched_off_or_before_the_first_step_the_filter_does_nothing() {
     sim.advance_frame().unwrap();
     sim.scene.disabled.pop_filter = true;
     assert_eq!(sim.pop_filter().unwrap(), None, "disabled");
+}
+
+/// A free 0.5 m cotton sheet, no gravity, fixed mesh; `relax` sets `initial_relax`.
+fn free_sheet(relax: bool, gravity: [f64; 3], handles: &str) -> Simulation {
+    let text = format!(
+        r#"{{"version": 1, "frame_time": 0.04, "steps_per_frame": 4, "frames": 2, "gravity": {gravity:?},
+            "initial_relax": {relax},
+            "cloths": [{{"rectangle": {{"width": 0.5, "height": 0.5, "resolution": [6, 6]}},
+                         "material": {{"preset": "cotton"}}, "handles": [{handles}]}}]}}"#
+    );
+    let scene = load_str(&text, Path::new("relax.json"), Path::new("."), "relax").unwrap();
+    Simulation::new(scene).unwrap()
+}
+
+#[test]
+fn the_initial_relaxation_releases_a_stretched_start() {
+    // The sheet given stretched by 20% across (a garment panel placed stretched towards its
+    // seam): relaxed, its elastic energy falls to a small part of what it was.
+    let mut sim = free_sheet(false, [0.0; 3], "");
+    sim.state.mesh.nodes.iter_mut().for_each(|n| n.x.x *= 1.2);
+    let x0 = sim.state.mesh.positions();
+    let before = sim.elastic().energy_at(&x0);
+    sim.relax_initial_state().unwrap();
+    let x1 = sim.state.mesh.positions();
+    let after = sim.elastic().energy_at(&x1);
+    assert!(before > 1e-3, "the stretched sheet stores energy: {before} J");
+    assert!(after < 0.01 * before, "elastic energy {before:.3e} J → {after:.3e} J");
+    // No load: the relaxation moves the sheet about its middle, not as a whole.
+    let centre = |x: &[Vec3]| x.iter().sum::<Vec3>() / x.len() as Real;
+    assert!((centre(&x1) - centre(&x0)).norm() < 1e-6, "the sheet drifted {} m", (centre(&x1) - centre(&x0)).norm());
+}
+
+#[test]
+fn the_initial_relaxation_leaves_a_sheet_at_rest_where_it_is() {
+    // Hanging from two corners under gravity but unstrained: gravity is not in the objective
+    // (ARCSim's equilibration zeroes the accelerations and leaves it out), so nothing moves.
+    let handles = r#"{"nodes": [42]}, {"nodes": [48]}"#;
+    let plain = free_sheet(false, [0.0, 0.0, -9.81], handles);
+    let relaxed = free_sheet(true, [0.0, 0.0, -9.81], handles);
+    assert!(relaxed.ws.pop.iterations > 0 && plain.ws.pop.iterations == 0, "`initial_relax` runs the relaxation");
+    assert_eq!(plain.state.mesh.positions(), relaxed.state.mesh.positions());
 }

@@ -13,7 +13,6 @@ use crate::collision::proximity::Contact;
 use crate::collision::speculative::Speculative;
 use crate::forces::handle::Spring;
 use crate::math::{Real, Vec3};
-use crate::scene::RemeshMode;
 use crate::solver::{SolveError, SolveTiming, StepInput};
 
 use super::checks::{self, Elastic, StepContext};
@@ -101,10 +100,7 @@ impl Simulation {
             .filter_map(|c| c.remesh.as_ref().filter(|r| r.mode.is_adaptive()).map(|r| r.every))
             .min();
         if every.is_some_and(|e| self.state.frame.is_multiple_of(e)) {
-            let s = self.remesh(RemeshMode::Adaptive)?;
-            self.ws.remesh_stats.splits += s.splits;
-            self.ws.remesh_stats.flips += s.flips;
-            self.ws.remesh_stats.collapses += s.collapses;
+            self.remesh_counted()?;
         }
         self.state.frame += 1;
         Ok(())

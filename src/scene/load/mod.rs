@@ -166,6 +166,7 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
             None => None,
         },
         disabled: Disabled::default(),
+        initial_relax: spec.initial_relax.unwrap_or(false),
     };
     let off = disabled_stages(ctx, &spec.disable)?;
     scene.disabled = Disabled {
