@@ -117,7 +117,8 @@ fn switched_off_or_before_the_first_step_the_filter_does_nothing() {
     assert_eq!(sim.pop_filter().unwrap(), None, "disabled");
 }
 
-/// A free 0.5 m cotton sheet, no gravity, fixed mesh; `relax` sets `initial_relax`.
+/// A 0.5 m cotton sheet on a fixed mesh with the given gravity and handles; `relax` sets
+/// `initial_relax`.
 fn free_sheet(relax: bool, gravity: [f64; 3], handles: &str) -> Simulation {
     let text = format!(
         r#"{{"version": 1, "frame_time": 0.04, "steps_per_frame": 4, "frames": 2, "gravity": {gravity:?},
