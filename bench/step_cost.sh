@@ -21,7 +21,8 @@ arcsim_run() {
   if [ -z "$frames" ]; then
     OMP_NUM_THREADS=$threads ./bin/arcsim simulateoffline "conf/$conf.json" "$1"
   else
-    # ARCSim has no frame limit: stop it once frame FRAMES is written.
+    # Stop ARCSim once frame FRAMES is written (the conf is run as shipped; a copy with
+    # "end_frame": FRAMES added, which ARCSim honours, would stop it too).
     OMP_NUM_THREADS=$threads ./bin/arcsim simulateoffline "conf/$conf.json" "$1" &
     local pid=$!
     while kill -0 $pid 2>/dev/null; do
