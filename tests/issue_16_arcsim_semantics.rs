@@ -300,8 +300,11 @@ fn circle_handles_hold_their_rings_on_the_moving_circle() {
     let (c, height, path) = tube_conf(&dir);
     let loaded = scene::load_path(&path, None).unwrap_or_else(|e| panic!("{e}"));
     assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    assert_eq!(loaded.scene.handles[0].nodes.len(), 8, "the input ring");
     let mut sim = Simulation::new(loaded.scene).unwrap();
-    assert_eq!(sim.state.handle_nodes[0].len(), 8);
+    // ARCSim's initial relaxation remeshes before frame 0 (`initial_relax`): ring edges may be
+    // split already, and their new nodes are held like the input's.
+    assert!(sim.state.handle_nodes[0].len() >= 8);
     let uv = |sim: &Simulation, n: usize| sim.state.mesh.verts.iter().find(|v| v.node.idx() == n).unwrap().u;
     for frame in 1..=30 {
         sim.advance_frame().unwrap();
