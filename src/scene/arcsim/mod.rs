@@ -10,8 +10,8 @@
 //! ordinary scene loader, so a conf and its converted scene simulate identically. What has no
 //! viewcloth equivalent is reported, one warning per key; ARCSim's defaults that differ from
 //! viewcloth's (gravity 0, air density 1 with no wind, friction 0.6 / 0.3, repulsion thickness
-//! 1 mm, rest angles flat) are written out explicitly, and so is ARCSim's relaxation of the
-//! initial state before its first frame (`initial_relax`).
+//! 1 mm, rest angles flat) are written out explicitly. ARCSim's relaxation of the initial state
+//! before its first frame is the scene option `initial_relax`, not set by the conversion (README).
 
 use std::path::{Path, PathBuf};
 

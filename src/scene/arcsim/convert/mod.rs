@@ -289,9 +289,6 @@ impl Conv<'_> {
             ("collision", obj(collision)),
             ("cloths", J::Arr(cloths.into_iter().map(J::Obj).collect())),
             ("obstacles", J::Arr(obstacles)),
-            // ARCSim relaxes every run's initial state before its first frame (`runphysics.cpp`,
-            // `relax_initial_state`).
-            ("initial_relax", J::Bool(true)),
         ];
         if !disable.is_empty() {
             fields.push(("disable", J::Arr(disable.iter().map(|d| J::Str(d.to_string())).collect())));
