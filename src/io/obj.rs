@@ -27,6 +27,18 @@ pub struct ObjData {
     pub triangles: Vec<[Corner; 3]>,
     pub face_line: Vec<usize>,
     pub position_line: Vec<usize>,
+    /// ARCSim's labelled edges (`e a b` followed by `el L`, L ≠ 0): creases the remesher keeps
+    /// as edges (`remesh`).
+    pub labelled_edges: Vec<LabelledEdge>,
+}
+
+/// An edge the file labels (ARCSim's `e` and `el` statements): 0-based position indices, the
+/// label and the 1-based line of its `e`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LabelledEdge {
+    pub n: [usize; 2],
+    pub label: u32,
+    pub line: usize,
 }
 
 /// A parse error: line number (1-based, 0 when it concerns the whole file) and message.
@@ -56,17 +68,20 @@ fn parse_floats<const N: usize>(words: &[&str], line: usize, what: &str) -> Resu
 }
 
 /// Resolves a 1-based (or negative, relative) OBJ index against `count` elements seen so far.
-fn resolve_index(word: &str, count: usize, line: usize, what: &str) -> Result<usize, ObjError> {
-    let i: i64 = word.parse().map_err(|_| err(line, format!("face: bad {what} index '{word}'")))?;
+/// `stmt` names the statement (`face`, `e`) in errors.
+fn resolve_index(word: &str, count: usize, line: usize, stmt: &str, what: &str) -> Result<usize, ObjError> {
+    let i: i64 = word.parse().map_err(|_| err(line, format!("{stmt}: bad {what} index '{word}'")))?;
     let idx = if i > 0 { i - 1 } else { count as i64 + i };
     if i == 0 || idx < 0 || idx >= count as i64 {
-        return Err(err(line, format!("face: {what} index {i} out of range (1..={count})")));
+        return Err(err(line, format!("{stmt}: {what} index {i} out of range (1..={count})")));
     }
     Ok(idx as usize)
 }
 
 pub fn parse_obj(text: &str) -> Result<ObjData, ObjError> {
     let mut d = ObjData::default();
+    // The last `e` statement, which an `el` labels (ARCSim labels `mesh.edges.back()`).
+    let mut last_edge: Option<LabelledEdge> = None;
     for (ln, raw) in text.lines().enumerate() {
         let line = ln + 1;
         let content = raw.split('#').next().unwrap_or("");
@@ -90,9 +105,9 @@ pub fn parse_obj(text: &str) -> Result<ObjData, ObjError> {
                 let mut corners = Vec::with_capacity(rest.len());
                 for w in &rest {
                     let mut parts = w.split('/');
-                    let v = resolve_index(parts.next().unwrap_or(""), d.positions.len(), line, "vertex")?;
+                    let v = resolve_index(parts.next().unwrap_or(""), d.positions.len(), line, "face", "vertex")?;
                     let vt = match parts.next() {
-                        Some(s) if !s.is_empty() => Some(resolve_index(s, d.texcoords.len(), line, "texture")?),
+                        Some(s) if !s.is_empty() => Some(resolve_index(s, d.texcoords.len(), line, "face", "texture")?),
                         _ => None,
                     };
                     corners.push(Corner { v, vt });
@@ -103,6 +118,29 @@ pub fn parse_obj(text: &str) -> Result<ObjData, ObjError> {
                 for k in 1..corners.len() - 1 {
                     d.triangles.push([corners[0], corners[k], corners[k + 1]]);
                     d.face_line.push(line);
+                }
+            }
+            "e" => {
+                if rest.len() != 2 {
+                    return Err(err(line, format!("'e' needs 2 vertex indices, found {}", rest.len())));
+                }
+                let a = resolve_index(rest[0], d.positions.len(), line, "e", "vertex")?;
+                let b = resolve_index(rest[1], d.positions.len(), line, "e", "vertex")?;
+                if a == b {
+                    return Err(err(line, format!("'e' joins vertex {} to itself", a + 1)));
+                }
+                last_edge = Some(LabelledEdge { n: [a, b], label: 0, line });
+            }
+            "el" => {
+                let Some(mut e) = last_edge.take() else {
+                    return Err(err(line, "'el' labels the edge of the 'e' line before it, and there is none"));
+                };
+                let [w] = rest[..] else {
+                    return Err(err(line, format!("'el' needs 1 label, found {}", rest.len())));
+                };
+                e.label = w.parse().map_err(|_| err(line, format!("'el': expected a label ≥ 0, found '{w}'")))?;
+                if e.label != 0 {
+                    d.labelled_edges.push(e);
                 }
             }
             _ => {}

@@ -78,6 +78,10 @@ pub struct Mesh {
     pub edges: Vec<Edge>,
     /// Derived: for each face, the edge opposite each corner (edge k joins corners k+1, k+2).
     pub face_edges: Vec<[EdgeId; 3]>,
+    /// Creases: edges the input labels (ARCSim's `e`/`el`), each as its two nodes, smaller id
+    /// first, sorted. Remeshing keeps them edges: never flipped, split into creases, their
+    /// nodes collapsed only along them (`remesh`).
+    pub creases: Vec<[NodeId; 2]>,
 }
 
 impl Mesh {

@@ -22,6 +22,8 @@ pub enum MeshError {
     Adjacency { what: String },
     #[error("node {node} has a non-finite position or velocity")]
     NonFinite { node: usize },
+    #[error("the crease between nodes {a} and {b} is not an edge of the mesh (or is listed twice)")]
+    Crease { a: u32, b: u32 },
 }
 
 /// Smallest material area accepted, relative to the mean face area.
@@ -106,6 +108,12 @@ impl Mesh {
                 if !edge.adj.0.iter().flatten().any(|(g, kk)| g.idx() == f && *kk as usize == k) {
                     return bad(format!("edge {} does not list face {f}", fe[k].idx()));
                 }
+            }
+        }
+        for (i, &[a, b]) in self.creases.iter().enumerate() {
+            let sorted = a < b && (i == 0 || self.creases[i - 1] < [a, b]);
+            if !sorted || !keys.contains(&(a, b)) {
+                return Err(MeshError::Crease { a: a.0, b: b.0 });
             }
         }
         Ok(())

@@ -2,7 +2,8 @@
 //! every edge longer than 1 in the sizing metric (worst first, local flips after each), then
 //! collapse edges whose removal keeps every new edge under 0.9 (local flips after each), until
 //! nothing changes. Operations are checked values (`ops`); boundaries keep their shape, seams
-//! stay closed (their nodes collapse only along them, both sides together), handle nodes stay,
+//! stay closed (their nodes collapse only along them, both sides together), creases stay edges
+//! (never flipped, split into creases, collapsed only along themselves), handle nodes stay,
 //! and no flip or collapse makes the cloth cross itself (`guard`).
 
 pub mod guard;
@@ -186,6 +187,8 @@ fn collapse_all(w: &mut Work, guard: &mut Guard, limits: &RemeshLimits, stats: &
     }
 }
 
+#[cfg(test)]
+mod crease_tests;
 #[cfg(test)]
 mod seam_tests;
 #[cfg(test)]

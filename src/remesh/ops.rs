@@ -18,13 +18,24 @@ pub struct Op {
     pub remove_verts: Vec<usize>,
     /// A collapse's removed verts, each with the vert it merges into.
     pub merged: Vec<(usize, usize)>,
+    /// The nodes of a split edge (its creases pass to the halves, `Work::split_crease`).
+    pub split_nodes: Option<(usize, usize)>,
+    /// A collapse's removed node and the node it merges into (`Work::collapse_crease`).
+    pub collapse_nodes: Option<(usize, usize)>,
 }
 
 impl Op {
     /// Applies the change; returns the ids of the added faces.
     pub fn apply(&self, w: &mut Work) -> Vec<usize> {
+        let first_node = w.x.len();
         for &n in &self.new_nodes {
             w.add_node(n);
+        }
+        if let Some((a, b)) = self.split_nodes {
+            w.split_crease(a, b, first_node);
+        }
+        if let Some((i, j)) = self.collapse_nodes {
+            w.collapse_crease(i, j);
         }
         for &(u, node, m) in &self.new_verts {
             w.add_vert(u, node, m);
@@ -87,7 +98,7 @@ pub fn split(w: &Work, a: usize, b: usize) -> Option<Op> {
         return None;
     }
     let (na, nb) = (w.vnode[a], w.vnode[b]);
-    let mut op = Op::default();
+    let mut op = Op { split_nodes: Some((na, nb)), ..Default::default() };
     let node = w.x.len();
     // A node between two nodes of one group joins it (ARCSim's `combine_label`).
     let group = if w.group[na] == w.group[nb] { w.group[na] } else { 0 };
@@ -120,9 +131,10 @@ pub fn split(w: &Work, a: usize, b: usize) -> Option<Op> {
 }
 
 /// Flip of the interior edge a–b: faces (a, b, c) and (b, a, d) become (c, a, d) and (d, b, c).
+/// A crease is never flipped (ARCSim's labelled edges).
 pub fn flip(w: &Work, a: usize, b: usize) -> Option<Op> {
     let faces = w.edge_faces(a, b);
-    if faces.len() != 2 {
+    if faces.len() != 2 || w.is_crease(w.vnode[a], w.vnode[b]) {
         return None;
     }
     let (f0, f1) = if w.directed(faces[0], a, b).is_some() { (faces[0], faces[1]) } else { (faces[1], faces[0]) };
@@ -179,10 +191,15 @@ pub fn should_flip(w: &Work, a: usize, b: usize, threshold: Real, max_fold: Real
 /// its neighbour on that same line, both sides of a seam together, so a boundary stays a
 /// boundary and a seam stays closed. `None` when node(i) must stay: a handle, a corner of the
 /// pattern (a boundary that turns, a node where seams meet), or when the link condition fails
-/// (the result would be non-manifold in material or world space).
+/// (the result would be non-manifold in material or world space). A node on a crease moves only
+/// along it, where it runs straight through the node (ARCSim's labelled edges; ARCSim also keeps
+/// every node the input puts on one, viewcloth only its ends, junctions and bends).
 pub fn collapse(w: &Work, i: usize, j: usize) -> Option<Op> {
     let (ni, nj) = (w.vnode[i], w.vnode[j]);
     if ni == nj || w.pinned[ni] || w.edge_faces(i, j).is_empty() {
+        return None;
+    }
+    if !w.ncrease[ni].is_empty() && !crease_runs_through(w, i, j) {
         return None;
     }
     let merged = if w.nverts[ni].len() == 1 && w.boundary_neighbours(i).is_empty() {
@@ -211,7 +228,7 @@ pub fn collapse(w: &Work, i: usize, j: usize) -> Option<Op> {
     if w.node_neighbours(nj).into_iter().filter(|n| ni_set.contains(n)).ne(opposite_nodes) {
         return None;
     }
-    let mut op = Op { merged: merged.clone(), ..Default::default() };
+    let mut op = Op { merged: merged.clone(), collapse_nodes: Some((ni, nj)), ..Default::default() };
     for &(s, t) in &merged {
         op.remove_verts.push(s);
         for &f in &w.vfaces[s] {
@@ -222,6 +239,20 @@ pub fn collapse(w: &Work, i: usize, j: usize) -> Option<Op> {
         }
     }
     Some(op)
+}
+
+/// Whether vert i's node lies on exactly two creases, one to j's node, running straight
+/// through it in material space (so collapsing i into j keeps the crease's line).
+fn crease_runs_through(w: &Work, i: usize, j: usize) -> bool {
+    let (ni, nj) = (w.vnode[i], w.vnode[j]);
+    let c = &w.ncrease[ni];
+    if c.len() != 2 || !c.contains(&nj) {
+        return false;
+    }
+    let nk = if c[0] == nj { c[1] } else { c[0] };
+    let Some(k) = w.neighbours(i).into_iter().find(|&v| w.vnode[v] == nk) else { return false };
+    let (e0, e1) = (w.u[j] - w.u[i], w.u[k] - w.u[i]);
+    cross2(&e0, &e1).abs() <= 1e-9 * e0.norm() * e1.norm() && e0.dot(&e1) < 0.0
 }
 
 /// For a boundary or seam vert i collapsing along the boundary edge i–j: each vert of node(i)

@@ -27,6 +27,8 @@ pub struct Work {
     pub vfaces: Vec<Vec<usize>>,
     /// Alive verts on each node (two or more on a seam).
     pub nverts: Vec<Vec<usize>>,
+    /// Each node's neighbours along creases (`Mesh::creases`; empty off them).
+    pub ncrease: Vec<Vec<usize>>,
 }
 
 /// A node a split creates: position, velocity and acceleration interpolated, its cloth and
@@ -77,6 +79,11 @@ impl Work {
         for (i, v) in mesh.verts.iter().enumerate() {
             nverts[v.node.idx()].push(i);
         }
+        let mut ncrease = vec![Vec::new(); mesh.nodes.len()];
+        for &[a, b] in &mesh.creases {
+            ncrease[a.idx()].push(b.idx());
+            ncrease[b.idx()].push(a.idx());
+        }
         Work {
             u: mesh.verts.iter().map(|v| v.u).collect(),
             vnode: mesh.verts.iter().map(|v| v.node.idx()).collect(),
@@ -100,6 +107,38 @@ impl Work {
             faces,
             vfaces,
             nverts,
+            ncrease,
+        }
+    }
+
+    /// Whether nodes `a` and `b` are joined by a crease.
+    pub fn is_crease(&self, a: usize, b: usize) -> bool {
+        self.ncrease[a].contains(&b)
+    }
+
+    /// The crease a–b becomes a–p and p–b (a split at new node `p`); nothing off creases.
+    pub fn split_crease(&mut self, a: usize, b: usize, p: usize) {
+        if !self.is_crease(a, b) {
+            return;
+        }
+        for (s, t) in [(a, b), (b, a)] {
+            for n in &mut self.ncrease[s] {
+                if *n == t {
+                    *n = p;
+                }
+            }
+        }
+        self.ncrease[p] = vec![a, b];
+    }
+
+    /// Node `i` collapsed into `j`: its creases other than i–j now end at `j`.
+    pub fn collapse_crease(&mut self, i: usize, j: usize) {
+        for k in std::mem::take(&mut self.ncrease[i]) {
+            self.ncrease[k].retain(|&n| n != i);
+            if k != j && !self.ncrease[k].contains(&j) {
+                self.ncrease[k].push(j);
+                self.ncrease[j].push(k);
+            }
         }
     }
 
@@ -236,6 +275,7 @@ impl Work {
         self.nalive.push(true);
         self.pinned.push(false);
         self.nverts.push(Vec::new());
+        self.ncrease.push(Vec::new());
         self.x.len() - 1
     }
 
@@ -286,6 +326,13 @@ impl Work {
                 face_damage.push(self.fdata[f].damage);
             }
         }
+        mesh.creases = (0..self.x.len())
+            .filter(|&a| self.nalive[a])
+            .flat_map(|a| self.ncrease[a].iter().filter(move |&&b| a < b).map(move |&b| (a, b)))
+            .filter(|&(_, b)| self.nalive[b])
+            .map(|(a, b)| [a, b].map(|n| NodeId(node_id[n] as u32)))
+            .collect();
+        mesh.creases.sort_unstable();
         mesh.rebuild_topology()?;
         let node_map = (0..old_nodes).map(|i| (node_id[i] != usize::MAX).then_some(node_id[i])).collect();
         Ok(Finished { mesh, node_map, face_shapes, face_damage, groups })

@@ -106,6 +106,7 @@ fn subset(obj: &ObjData, keep: impl Fn(usize) -> bool) -> (ObjData, Vec<usize>) 
             .collect(),
         face_line: tris.iter().map(|&t| obj.face_line[t]).collect(),
         position_line: v_kept.iter().map(|&i| obj.position_line[i]).collect(),
+        labelled_edges: Vec::new(),
     };
     (sub, v_kept)
 }

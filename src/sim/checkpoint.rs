@@ -3,7 +3,7 @@
 //!
 //! What is stored is the `SimState` (`state.rs`): the mesh (material coordinates, node
 //! positions, velocities, accelerations, masses; the faces, from which edges are re-derived in the same
-//! deterministic order), the rest dihedral angles, the faces' plastic state, the handles' node
+//! deterministic order; the creases), the rest dihedral angles, the faces' plastic state, the handles' node
 //! ids and switch-ons (when, and where their nodes were), the node pairs added to the system's
 //! sparsity pattern, time, step and frame counters. The `Workspace` is rebuilt from it and the scene.
 //!
@@ -24,7 +24,7 @@ use super::state::PlasticState;
 use super::SimState;
 
 const MAGIC: &[u8; 8] = b"VCLOTHCK";
-const FORMAT_VERSION: u32 = 9;
+const FORMAT_VERSION: u32 = 10;
 /// File names: `checkpoint_<frame>.bin`.
 const PREFIX: &str = "checkpoint_";
 const SUFFIX: &str = ".bin";
@@ -186,6 +186,8 @@ pub fn encode(run: &RunRecord, st: &SimState, stats: &RunStats) -> Vec<u8> {
         f.v.iter().for_each(|v| w.u32(v.0));
         w.u32(f.material as u32);
     }
+    w.usize(m.creases.len());
+    m.creases.iter().flatten().for_each(|n| w.u32(n.0));
     w.usize(st.rest_angles.len());
     st.rest_angles.iter().for_each(|&a| w.f64(a));
     match &st.plastic {
@@ -312,6 +314,8 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
     if mesh.verts.iter().any(|v| v.node.idx() >= nn) {
         return Err("vert references a missing node".into());
     }
+    let nc = r.count(8)?;
+    mesh.creases = (0..nc).map(|_| Ok([NodeId(r.u32()?), NodeId(r.u32()?)])).collect::<Result<_, String>>()?;
     let na = r.count(8)?;
     let rest_angles = (0..na).map(|_| r.f64()).collect::<Result<Vec<_>, _>>()?;
     let plastic = match r.u8()? {

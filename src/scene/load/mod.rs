@@ -494,6 +494,8 @@ fn add_cloth(ctx: &Ctx, scene: &mut Scene, path: &str, cs: &ClothSpec, placement
     for f in &local.faces {
         scene.mesh.faces.push(Face { v: f.v.map(|v| VertId(v.0 + vert0 as u32)), material: c as u16 });
     }
+    // Cloths follow each other in node order, so the creases stay sorted.
+    scene.mesh.creases.extend(local.creases.iter().map(|e| e.map(|n| NodeId(n.0 + node0 as u32))));
     for (h, hs) in cs.handles.iter().enumerate() {
         let handle = load_handle(ctx, &format!("{path}.handles[{h}]"), hs, &local, node0, scene, placement)?;
         scene.handles.push(handle);
@@ -589,6 +591,7 @@ fn mesh_from_obj(file: &Path, d: &ObjData, uv_scale: f64) -> Res<Mesh> {
         }
         other => InputError { file: file.to_path_buf(), location: None, msg: other.to_string() },
     })?;
+    mesh.creases = creases(&mesh, d).map_err(|(line, msg)| line_err(line, msg))?;
     mesh.validate().map_err(|e| match e {
         MeshError::DuplicateFace { face, other } => {
             line_err(d.face_line[face], format!("duplicate face (same vertices as line {})", d.face_line[other]))
@@ -599,6 +602,24 @@ fn mesh_from_obj(file: &Path, d: &ObjData, uv_scale: f64) -> Res<Mesh> {
         other => InputError { file: file.to_path_buf(), location: None, msg: other.to_string() },
     })?;
     Ok(mesh)
+}
+
+/// The file's labelled edges as creases (`Mesh::creases`); each must be an edge of the faces.
+fn creases(mesh: &Mesh, d: &ObjData) -> Result<Vec<[NodeId; 2]>, (usize, String)> {
+    let edges: std::collections::HashSet<[NodeId; 2]> = mesh.edges.iter().map(|e| [e.n[0].min(e.n[1]), e.n[0].max(e.n[1])]).collect();
+    let mut out = Vec::with_capacity(d.labelled_edges.len());
+    for e in &d.labelled_edges {
+        let [a, b] = e.n.map(|n| NodeId(n as u32));
+        let key = [a.min(b), a.max(b)];
+        if !edges.contains(&key) {
+            let msg = format!("labelled edge 'e {} {}' is not an edge of the faces (expected two vertices of one face)", e.n[0] + 1, e.n[1] + 1);
+            return Err((e.line, msg));
+        }
+        out.push(key);
+    }
+    out.sort_unstable();
+    out.dedup();
+    Ok(out)
 }
 
 /// Material coordinates for a mesh without `vt`: the rest mesh must be flat; its vertices are
