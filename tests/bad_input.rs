@@ -298,6 +298,14 @@ fn cases() -> Vec<Case> {
             "out of range",
         ),
         with(
+            // ARCSim's edge labels (creases): nodes 1 and 9 are opposite corners of the grid.
+            "labelled_edge_not_an_edge",
+            grid_obj("e 1 9\nel 1\n"),
+            Loc::Line(19),
+            "labelled edge",
+        ),
+        with("edge_label_without_edge", grid_obj("el 1\n"), Loc::Line(19), "'el'"),
+        with(
             "no_faces",
             "v 0 0 0\nv 1 0 0\nv 0 1 0\n".to_string(),
             Loc::FileOnly,

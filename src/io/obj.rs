@@ -262,4 +262,20 @@ mod tests {
         assert_eq!(parse_obj("v 0 0 0\n").unwrap_err().line, 0);
         assert!(parse_obj("v 0 0 inf\n").unwrap_err().msg.contains("finite"));
     }
+
+    #[test]
+    fn reads_arcsim_edge_labels() {
+        let quad = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+        // Labelled, unlabelled (no `el`, or `el 0`), and `ea`/`ed` skipped.
+        let text = format!("{quad}e 1 3\nel 2\ne 1 2\ne 2 3\nea 0.5\nel 0\nf 1 2 3\nf 1 3 4\n");
+        let d = parse_obj(&text).unwrap();
+        assert_eq!(d.labelled_edges, vec![LabelledEdge { n: [0, 2], label: 2, line: 5 }]);
+        let bad = |text: &str| parse_obj(&format!("{quad}{text}f 1 2 3\n")).unwrap_err();
+        assert_eq!(bad("el 1\n").line, 5);
+        assert!(bad("el 1\n").msg.contains("no"), "{}", bad("el 1\n").msg);
+        assert!(bad("e 1 7\nel 1\n").msg.contains("out of range"));
+        assert!(bad("e 1 1\n").msg.contains("itself"));
+        assert!(bad("e 1 2\nel x\n").msg.contains("label"));
+        assert_eq!(bad("e 1 2\nel 1\nel 1\n").line, 7);
+    }
 }

@@ -19,7 +19,10 @@ fn folded(angle: f64) -> Mesh {
         }
     }
     let id = |i: usize, j: usize| NodeId((j * (N + 1) + i) as u32);
-    m.creases = (0..N).map(|j| [id(N / 2, j), id(N / 2, j + 1)]).chain((0..N / 2).map(|i| [id(i, N / 2), id(i + 1, N / 2)])).collect();
+    m.creases = (0..N)
+        .map(|j| [id(N / 2, j), id(N / 2, j + 1)])
+        .chain((0..N / 2).map(|i| [id(i, N / 2), id(i + 1, N / 2)]))
+        .collect();
     m.creases.sort_unstable();
     m.validate().unwrap();
     m
@@ -56,7 +59,10 @@ fn assert_creases_cover_the_lines(m: &Mesh) {
             horizontal += (ub.x - ua.x).abs();
         }
     }
-    assert!((vertical - 1.0).abs() < 1e-9 && (horizontal - 0.5).abs() < 1e-9, "creases cover {vertical} and {horizontal}");
+    assert!(
+        (vertical - 1.0).abs() < 1e-9 && (horizontal - 0.5).abs() < 1e-9,
+        "creases cover {vertical} and {horizontal}"
+    );
 }
 
 #[test]
@@ -82,14 +88,26 @@ fn a_fold_on_a_crease_stays_on_edges_through_refinement_and_coarsening() {
         assert_creases_cover_the_lines(&mesh);
     }
     let coarse = on_creases(&mesh);
-    eprintln!("crease nodes {} → {refined} → {coarse}; faces {} → {}", on_creases(&start), start.faces.len(), mesh.faces.len());
+    eprintln!(
+        "crease nodes {} → {refined} → {coarse}; faces {} → {}",
+        on_creases(&start),
+        start.faces.len(),
+        mesh.faces.len()
+    );
     assert!(refined > 2 * on_creases(&start), "refining added too few crease nodes: {refined}");
     // Kept: the three ends and the junction; a straight crease's inner nodes may go.
-    assert!(coarse < on_creases(&start), "crease nodes {} → {refined} (refined) → {coarse} (coarsened)", on_creases(&start));
+    assert!(
+        coarse < on_creases(&start),
+        "crease nodes {} → {refined} (refined) → {coarse} (coarsened)",
+        on_creases(&start)
+    );
     let u = |n: usize| mesh.verts.iter().find(|v| v.node.idx() == n).unwrap().u;
     let crease_points: Vec<_> = mesh.creases.iter().flatten().map(|n| u(n.idx())).collect();
     for p in [[0.5, 0.0], [0.5, 1.0], [0.0, 0.5], [0.5, 0.5]] {
-        assert!(crease_points.iter().any(|q| (q.x - p[0]).abs() < 1e-12 && (q.y - p[1]).abs() < 1e-12), "crease point {p:?} lost");
+        assert!(
+            crease_points.iter().any(|q| (q.x - p[0]).abs() < 1e-12 && (q.y - p[1]).abs() < 1e-12),
+            "crease point {p:?} lost"
+        );
     }
 }
 

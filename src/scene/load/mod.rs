@@ -606,13 +606,18 @@ fn mesh_from_obj(file: &Path, d: &ObjData, uv_scale: f64) -> Res<Mesh> {
 
 /// The file's labelled edges as creases (`Mesh::creases`); each must be an edge of the faces.
 fn creases(mesh: &Mesh, d: &ObjData) -> Result<Vec<[NodeId; 2]>, (usize, String)> {
-    let edges: std::collections::HashSet<[NodeId; 2]> = mesh.edges.iter().map(|e| [e.n[0].min(e.n[1]), e.n[0].max(e.n[1])]).collect();
+    let edges: std::collections::HashSet<[NodeId; 2]> =
+        mesh.edges.iter().map(|e| [e.n[0].min(e.n[1]), e.n[0].max(e.n[1])]).collect();
     let mut out = Vec::with_capacity(d.labelled_edges.len());
     for e in &d.labelled_edges {
         let [a, b] = e.n.map(|n| NodeId(n as u32));
         let key = [a.min(b), a.max(b)];
         if !edges.contains(&key) {
-            let msg = format!("labelled edge 'e {} {}' is not an edge of the faces (expected two vertices of one face)", e.n[0] + 1, e.n[1] + 1);
+            let msg = format!(
+                "labelled edge 'e {} {}' is not an edge of the faces (expected two vertices of one face)",
+                e.n[0] + 1,
+                e.n[1] + 1
+            );
             return Err((e.line, msg));
         }
         out.push(key);
