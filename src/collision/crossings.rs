@@ -280,6 +280,20 @@ mod tests {
     }
 
     #[test]
+    fn triangles_sharing_a_node_cross_only_beyond_it() {
+        // The remesher's guard tests such pairs with the same predicate (`remesh::guard`).
+        let o = v(0.0, 0.0, 0.0);
+        let floor = [o, v(1.0, 0.0, 0.0), v(0.0, 1.0, 0.0)];
+        // Through the floor's interior along the diagonal from the shared node.
+        assert!(triangles_cross(&floor, &[o, v(1.0, 1.0, 1.0), v(1.0, 1.0, -1.0)]));
+        // The same wall turned away: it meets the floor at the shared node only.
+        assert!(!triangles_cross(&floor, &[o, v(-1.0, -1.0, 1.0), v(-1.0, -1.0, -1.0)]));
+        // Standing on the floor's edge from the node (a fold): touching, not crossing.
+        assert!(!triangles_cross(&floor, &[o, v(1.0, 0.0, 0.0), v(0.5, 0.0, 1.0)]));
+        assert!(!triangles_cross(&floor, &[o, v(2.0, 0.0, 0.0), v(0.5, 0.0, 1.0)]));
+    }
+
+    #[test]
     fn shared_node_pairs_are_skipped_and_a_fold_through_is_found() {
         let (mut x, tris) = grid(6, 0.0);
         let none = Soup { x: &[], tris: &[] };

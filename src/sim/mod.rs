@@ -85,7 +85,8 @@ impl Simulation {
     }
 
     /// ARCSim's `relax_initial_state`: equilibrate, remesh adaptively (its initialising remesh),
-    /// equilibrate again (`pop::equilibrate`). The remesh's counts join frame 1's.
+    /// equilibrate again (`pop::equilibrate`), and then cloths that rest in their input's shape
+    /// rest in the relaxed one (`retake_rest_shape`). The remesh's counts join frame 1's.
     fn relax_initial_state(&mut self) -> Result<(), SimError> {
         let Some(first) = self.equilibrate()? else { return Ok(()) };
         let adaptive = self.scene.cloths.iter().any(|c| c.remesh.as_ref().is_some_and(|r| r.mode.is_adaptive()));
@@ -95,7 +96,28 @@ impl Simulation {
             iterations += self.equilibrate()?.map_or(0, |s| s.iterations);
         }
         self.ws.pop.iterations += iterations;
-        Ok(())
+        self.retake_rest_shape()
+    }
+
+    /// After the initial relaxation, the rest dihedral angles of cloths that rest in their
+    /// input's shape (`rest_angles: "input"`) become the relaxed shape's, and their plastic shape
+    /// follows with no damage: ARCSim's `reset_plasticity` after `relax_initial_state` under
+    /// `preserve_creases`, the one case in which its rest angles are not flat. A folded model
+    /// (dart.json's paper plane) is then at rest in the shape the relaxation gave it, its folds
+    /// sharp on the remeshed creases, instead of carrying the input's folds through the face
+    /// shape operators of a remesh (`remesh::rest_shape`), which spreads a fold over the faces
+    /// beside it.
+    fn retake_rest_shape(&mut self) -> Result<(), SimError> {
+        if self.scene.cloths.iter().all(|c| c.flat_rest) {
+            return Ok(());
+        }
+        let state = &mut self.state;
+        state.rest_angles = self.scene.rest_angles(&state.mesh);
+        if let Some(plastic) = &mut state.plastic {
+            plastic.shapes = crate::remesh::rest_shape::face_shapes(&state.mesh, &state.rest_angles);
+            plastic.damage = vec![0.0; state.mesh.faces.len()];
+        }
+        self.ws.remeshed(&self.state, &self.scene.materials)
     }
 
     /// An adaptive remesh whose operation counts join the next frame's statistics.
