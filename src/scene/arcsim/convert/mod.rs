@@ -290,6 +290,15 @@ impl Conv<'_> {
             ("cloths", J::Arr(cloths.into_iter().map(J::Obj).collect())),
             ("obstacles", J::Arr(obstacles)),
         ];
+        if magic.preserve_creases {
+            // ARCSim relaxes every run's initial state (`relax_initial_state`) and, under
+            // `preserve_creases`, rests the cloth in the relaxed shape. Converted confs relax only
+            // here (README, "ARCSim's initial relaxation"): the input of such a conf is a folded
+            // model whose folds need not be isometric to its pattern (dart.obj starts at 13%
+            // strain, 170 J of elastic energy) and is its rest shape, so it must relax first.
+            fields.push(("initial_relax", J::Bool(true)));
+            self.origin("initial_relax", Origin::Same("magic.preserve_creases".into()));
+        }
         if !disable.is_empty() {
             fields.push(("disable", J::Arr(disable.iter().map(|d| J::Str(d.to_string())).collect())));
         }
