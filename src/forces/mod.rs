@@ -137,11 +137,20 @@ impl RestState {
 /// Current dihedral angle of every edge (zero on boundary edges): the rest angles of a scene
 /// are those of its input shape.
 pub fn edge_angles(mesh: &Mesh) -> Vec<Real> {
+    edge_angles_by(mesh, |n| mesh.nodes[n].x)
+}
+
+/// `edge_angles` of the mesh with its nodes at `x` (a rest embedding, `SimState::rest_x`).
+pub fn edge_angles_at(mesh: &Mesh, x: &[crate::math::Vec3]) -> Vec<Real> {
+    edge_angles_by(mesh, |n| x[n])
+}
+
+fn edge_angles_by(mesh: &Mesh, at: impl Fn(usize) -> crate::math::Vec3) -> Vec<Real> {
     (0..mesh.edges.len())
         .map(|e| match mesh.hinge_nodes(e) {
             Some(h) => {
                 let x = h.map(|n| {
-                    let p = mesh.nodes[n].x;
+                    let p = at(n);
                     crate::math::dual::V3([p.x, p.y, p.z])
                 });
                 dihedral_angle(&x)

@@ -11,7 +11,7 @@ pub mod ops;
 pub mod rest_shape;
 pub mod work;
 
-use crate::math::{Mat2, Real};
+use crate::math::{Mat2, Real, Vec3};
 use crate::mesh::{Mesh, MeshError};
 use guard::Guard;
 use work::Work;
@@ -45,9 +45,11 @@ pub struct RemeshLimits {
 /// Remeshes `mesh` to the per-vert sizing metrics `vsize`; nodes flagged in `pinned` (handles)
 /// survive; `groups` (empty: none) gives nodes a group that a node split between two of them
 /// joins; `shapes` are the faces' rest shape operators (`rest_shape`; empty for a flat rest
-/// shape) and `damage` their plastic damage (empty: none). Returns the new mesh with the map
-/// from old to new node ids, the new faces' rest shape operators and damage, and the nodes'
-/// groups.
+/// shape) and `damage` their plastic damage (empty: none); `rest_x` the nodes' rest embedding
+/// (empty: none; a split's node takes the midpoint). Returns the new mesh with the map from old
+/// to new node ids, the new faces' rest shape operators and damage, the nodes' groups and rest
+/// embedding.
+#[allow(clippy::too_many_arguments)]
 pub fn remesh(
     mesh: &Mesh,
     vsize: Vec<Mat2>,
@@ -55,9 +57,10 @@ pub fn remesh(
     groups: &[u32],
     shapes: &[Mat2],
     damage: &[Real],
+    rest_x: &[Vec3],
     limits: &RemeshLimits,
 ) -> Result<(Finished, RemeshStats), MeshError> {
-    let mut w = Work::new(mesh, vsize, pinned, shapes, damage);
+    let mut w = Work::new(mesh, vsize, pinned, shapes, damage, rest_x);
     if !groups.is_empty() {
         w.group = groups.to_vec();
     }

@@ -1,7 +1,7 @@
 //! Remeshing operations as values (ARCSim's `RemeshOp`): what is added and what is removed.
 //! An operation is built, checked, and only then applied to the working mesh.
 
-use crate::math::{cross2, Mat2, Real, Vec2};
+use crate::math::{cross2, Mat2, Real, Vec2, Vec3};
 
 use super::work::{FaceData, NewNode, Work};
 
@@ -106,6 +106,10 @@ pub fn split(w: &Work, a: usize, b: usize) -> Option<Op> {
         x: 0.5 * (w.x[na] + w.x[nb]),
         v: 0.5 * (w.v[na] + w.v[nb]),
         a: 0.5 * (w.a[na] + w.a[nb]),
+        y: match w.y.is_empty() {
+            true => Vec3::zeros(),
+            false => 0.5 * (w.y[na] + w.y[nb]),
+        },
         cloth: w.cloth[na],
         group,
     });

@@ -13,6 +13,8 @@ pub struct Work {
     pub x: Vec<Vec3>,
     pub v: Vec<Vec3>,
     pub a: Vec<Vec3>,
+    /// Rest embedding per node (`SimState::rest_x`); empty without one.
+    pub y: Vec<Vec3>,
     pub cloth: Vec<u16>,
     pub nalive: Vec<bool>,
     /// Nodes that must survive (handles).
@@ -38,6 +40,8 @@ pub struct NewNode {
     pub x: Vec3,
     pub v: Vec3,
     pub a: Vec3,
+    /// Rest embedding (unused without one).
+    pub y: Vec3,
     pub cloth: u16,
     pub group: u32,
 }
@@ -61,12 +65,22 @@ pub struct Finished {
     /// The group of every node of `mesh`.
     pub groups: Vec<u32>,
     pub face_damage: Vec<Real>,
+    /// The rest embedding of every node of `mesh` (empty without one).
+    pub rest_x: Vec<Vec3>,
 }
 
 impl Work {
     /// `shapes`: each face's rest shape operator (empty: all zero, a flat rest shape); `damage`
-    /// each face's plastic damage (empty: all zero).
-    pub fn new(mesh: &Mesh, vsize: Vec<Mat2>, pinned: Vec<bool>, shapes: &[Mat2], damage: &[Real]) -> Self {
+    /// each face's plastic damage (empty: all zero); `rest_x` each node's rest embedding
+    /// (empty: none).
+    pub fn new(
+        mesh: &Mesh,
+        vsize: Vec<Mat2>,
+        pinned: Vec<bool>,
+        shapes: &[Mat2],
+        damage: &[Real],
+        rest_x: &[Vec3],
+    ) -> Self {
         let nv = mesh.verts.len();
         let mut vfaces = vec![Vec::new(); nv];
         let faces: Vec<[usize; 3]> = mesh.faces.iter().map(|f| f.v.map(|v| v.idx())).collect();
@@ -92,6 +106,7 @@ impl Work {
             x: mesh.nodes.iter().map(|n| n.x).collect(),
             v: mesh.nodes.iter().map(|n| n.v).collect(),
             a: mesh.nodes.iter().map(|n| n.a).collect(),
+            y: rest_x.to_vec(),
             cloth: mesh.nodes.iter().map(|n| n.cloth).collect(),
             nalive: vec![true; mesh.nodes.len()],
             pinned,
@@ -271,6 +286,9 @@ impl Work {
         self.x.push(n.x);
         self.v.push(n.v);
         self.a.push(n.a);
+        if !self.y.is_empty() {
+            self.y.push(n.y);
+        }
         self.cloth.push(n.cloth);
         self.nalive.push(true);
         self.pinned.push(false);
@@ -303,11 +321,14 @@ impl Work {
     pub fn finish(&self, old_nodes: usize) -> Result<Finished, MeshError> {
         let mut node_id = vec![usize::MAX; self.x.len()];
         let mut mesh = Mesh::default();
-        let mut groups = Vec::new();
+        let (mut groups, mut rest_x) = (Vec::new(), Vec::new());
         for i in 0..self.x.len() {
             if self.nalive[i] {
                 node_id[i] = mesh.nodes.len();
                 groups.push(self.group[i]);
+                if !self.y.is_empty() {
+                    rest_x.push(self.y[i]);
+                }
                 mesh.nodes.push(Node { x: self.x[i], v: self.v[i], a: self.a[i], mass: 0.0, cloth: self.cloth[i] });
             }
         }
@@ -335,6 +356,6 @@ impl Work {
         mesh.creases.sort_unstable();
         mesh.rebuild_topology()?;
         let node_map = (0..old_nodes).map(|i| (node_id[i] != usize::MAX).then_some(node_id[i])).collect();
-        Ok(Finished { mesh, node_map, face_shapes, face_damage, groups })
+        Ok(Finished { mesh, node_map, face_shapes, face_damage, groups, rest_x })
     }
 }

@@ -231,7 +231,15 @@ impl Scene {
     /// Rest dihedral angle of every edge of `mesh`: its current angle, or zero on cloths that
     /// rest flat.
     pub fn rest_angles(&self, mesh: &Mesh) -> Vec<Real> {
-        let mut angles = crate::forces::edge_angles(mesh);
+        self.flat_where_resting_flat(mesh, crate::forces::edge_angles(mesh))
+    }
+
+    /// `rest_angles` of the mesh with its nodes at the rest embedding `x` (`SimState::rest_x`).
+    pub fn rest_angles_at(&self, mesh: &Mesh, x: &[crate::math::Vec3]) -> Vec<Real> {
+        self.flat_where_resting_flat(mesh, crate::forces::edge_angles_at(mesh, x))
+    }
+
+    fn flat_where_resting_flat(&self, mesh: &Mesh, mut angles: Vec<Real>) -> Vec<Real> {
         for (a, e) in angles.iter_mut().zip(&mesh.edges) {
             if self.cloths.get(mesh.nodes[e.n[0].idx()].cloth as usize).is_some_and(|c| c.flat_rest) {
                 *a = 0.0;

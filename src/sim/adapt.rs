@@ -7,7 +7,7 @@ use std::time::Instant;
 use crate::forces::buckling::compensation;
 use crate::io::stats::ViewFrameStats;
 use crate::math::{Mat2, Real};
-use crate::remesh::rest_shape::{edge_angles_from_shapes, face_shapes};
+use crate::remesh::rest_shape::{edge_angles_from_shapes, face_shape, face_shapes};
 use crate::remesh::{remesh, Finished, RemeshLimits, RemeshStats};
 use crate::scene::RemeshMode;
 use crate::sizing::view::{face_views, view_summary};
@@ -176,17 +176,11 @@ impl Simulation {
         let limits = RemeshLimits { size_min, aspect_min, coarsen: mode.is_adaptive() };
         let preserved = self.preserved_nodes(&params);
         let groups = self.circle_groups();
-        // The plastic state is carried as it is; a flat rest shape (every angle zero) stays flat
-        // without carrying it.
-        let (shapes, damage) = match &self.state.plastic {
-            Some(p) => (p.shapes.clone(), p.damage.clone()),
-            None if self.state.rest_angles.iter().any(|&a| a != 0.0) => {
-                (face_shapes(&self.state.mesh, &self.state.rest_angles), Vec::new())
-            }
-            None => (Vec::new(), Vec::new()),
-        };
-        let (finished, stats) = remesh(&self.state.mesh, vsize, preserved, &groups, &shapes, &damage, &limits)
-            .map_err(|e| SimError::Mesh(format!("remeshing failed: {e}")))?;
+        let (shapes, damage) = self.shapes_to_carry();
+        let state = &self.state;
+        let (finished, stats) =
+            remesh(&state.mesh, vsize, preserved, &groups, &shapes, &damage, &state.rest_x, &limits)
+                .map_err(|e| SimError::Mesh(format!("remeshing failed: {e}")))?;
         let changed = stats.splits + stats.collapses + stats.flips > 0;
         let memory = match views.is_empty() {
             true => Vec::new(),
@@ -263,25 +257,70 @@ impl Simulation {
         (0..faces.len()).map(|f| yields(f).then_some(plastic.shapes[f])).collect()
     }
 
+    /// What the faces carry through a remesh (`remesh::rest_shape`): with a rest embedding
+    /// (`SimState::rest_x`), the new mesh's rest angles come from it, so the faces carry only the
+    /// plastic state's departure from it (ARCSim's residuals, `back_up_residuals`); without
+    /// one, the plastic state as it is, or the rest angles' shape operators; a flat rest shape
+    /// (every angle zero) stays flat without carrying anything.
+    fn shapes_to_carry(&self) -> (Vec<Mat2>, Vec<Real>) {
+        let state = &self.state;
+        let embedded = !state.rest_x.is_empty();
+        match &state.plastic {
+            Some(p) if embedded => {
+                let angles = self.scene.rest_angles_at(&state.mesh, &state.rest_x);
+                let residual = (0..p.shapes.len()).map(|f| p.shapes[f] - face_shape(&state.mesh, f, &angles)).collect();
+                (residual, p.damage.clone())
+            }
+            Some(p) => (p.shapes.clone(), p.damage.clone()),
+            None if !embedded && state.rest_angles.iter().any(|&a| a != 0.0) => {
+                (face_shapes(&state.mesh, &state.rest_angles), Vec::new())
+            }
+            None => (Vec::new(), Vec::new()),
+        }
+    }
+
     /// Takes a remeshed mesh: handles renumbered (circle rings: the nodes of their group), rest
     /// angles solved from the rest shape the faces carried through the remesh
     /// (`remesh::rest_shape`; all zero for a flat rest shape), the plastic state taken over,
     /// masses and rest data rebuilt, the implicit system's new pattern left for the next step to
     /// analyse, cloth pushed back out of obstacles (the `separation` stage, unless switched off).
     fn adopt(&mut self, finished: Finished) -> Result<(), SimError> {
-        let Finished { mesh, node_map, face_shapes, face_damage, groups } = finished;
+        let Finished { mesh, node_map, face_shapes, face_damage, groups, rest_x } = finished;
         let state = &mut self.state;
         let curved = state.plastic.is_some() || state.rest_angles.iter().any(|&a| a != 0.0);
+        let embedded = !state.rest_x.is_empty();
         for n in state.handle_nodes.iter_mut().flatten() {
             *n = node_map[*n].ok_or_else(|| SimError::Mesh("remeshing removed a handle node".into()))?;
         }
         state.mesh = mesh;
         let density: Vec<Real> = self.scene.materials.iter().map(|m| m.density).collect();
         state.mesh.compute_masses(&density);
-        state.rest_angles = match curved {
-            true => edge_angles_from_shapes(&state.mesh, &face_shapes),
-            false => vec![0.0; state.mesh.edges.len()],
+        // With a rest embedding the faces carried plastic residuals (`shapes_to_carry`): the
+        // plastic shape is the embedding's plus the residual (ARCSim's `restore_residuals`), and
+        // the rest angles of elastic cloth are the embedding's own, exactly (a fold stays on its
+        // edges; the faces beside it stay flat).
+        let face_shapes = match embedded {
+            true => {
+                state.rest_x = rest_x;
+                let angles = self.scene.rest_angles_at(&state.mesh, &state.rest_x);
+                match state.plastic.is_some() {
+                    true => {
+                        (0..face_shapes.len()).map(|f| face_shapes[f] + face_shape(&state.mesh, f, &angles)).collect()
+                    }
+                    false => {
+                        state.rest_angles = angles;
+                        Vec::new()
+                    }
+                }
+            }
+            false => face_shapes,
         };
+        if !(embedded && state.plastic.is_none()) {
+            state.rest_angles = match curved {
+                true => edge_angles_from_shapes(&state.mesh, &face_shapes),
+                false => vec![0.0; state.mesh.edges.len()],
+            };
+        }
         if let Some(plastic) = &mut state.plastic {
             *plastic = PlasticState { shapes: face_shapes, damage: face_damage };
         }

@@ -3,7 +3,7 @@
 //!
 //! What is stored is the `SimState` (`state.rs`): the mesh (material coordinates, node
 //! positions, velocities, accelerations, masses; the faces, from which edges are re-derived in the same
-//! deterministic order; the creases), the rest dihedral angles, the faces' plastic state, the handles' node
+//! deterministic order; the creases), the rest dihedral angles and rest embedding, the faces' plastic state, the handles' node
 //! ids and switch-ons (when, and where their nodes were), the node pairs added to the system's
 //! sparsity pattern, time, step and frame counters. The `Workspace` is rebuilt from it and the scene.
 //!
@@ -190,6 +190,8 @@ pub fn encode(run: &RunRecord, st: &SimState, stats: &RunStats) -> Vec<u8> {
     m.creases.iter().flatten().for_each(|n| w.u32(n.0));
     w.usize(st.rest_angles.len());
     st.rest_angles.iter().for_each(|&a| w.f64(a));
+    w.usize(st.rest_x.len());
+    st.rest_x.iter().flat_map(|p| p.iter()).for_each(|&c| w.f64(c));
     match &st.plastic {
         None => w.u8(0),
         Some(p) => {
@@ -318,6 +320,8 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
     mesh.creases = (0..nc).map(|_| Ok([NodeId(r.u32()?), NodeId(r.u32()?)])).collect::<Result<_, String>>()?;
     let na = r.count(8)?;
     let rest_angles = (0..na).map(|_| r.f64()).collect::<Result<Vec<_>, _>>()?;
+    let nr = r.count(24)?;
+    let rest_x = (0..nr).map(|_| Ok(Vec3::new(r.f64()?, r.f64()?, r.f64()?))).collect::<Result<Vec<_>, String>>()?;
     let plastic = match r.u8()? {
         0 => None,
         1 => {
@@ -371,6 +375,7 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
         separating,
         mesh,
         rest_angles,
+        rest_x,
         plastic,
         handle_nodes,
         handle_on,
@@ -466,8 +471,13 @@ mod tests {
             time: 0.12,
             pushed_out: 0,
             separating: true,
-            mesh: crate::mesh::rectangle(1.0, 1.0, 2, 2).unwrap(),
+            mesh: {
+                let mut m = crate::mesh::rectangle(1.0, 1.0, 2, 2).unwrap();
+                m.creases = vec![[crate::mesh::NodeId(1), crate::mesh::NodeId(4)]];
+                m
+            },
             rest_angles: vec![0.0; 16],
+            rest_x: (0..9).map(|i| Vec3::new(i as f64, 0.5, -1.0)).collect(),
             plastic: Some(PlasticState { shapes: vec![Mat2::new(1.0, 2.0, 2.0, 3.0); 8], damage: vec![0.5; 8] }),
             handle_nodes: vec![vec![0, 2]],
             handle_on: vec![Some(HandleOn { time: 0.5, x: vec![Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.0, -1.0, 0.5)] })],
@@ -497,6 +507,8 @@ mod tests {
         assert_eq!(back.state.handle_on, st.handle_on);
         assert_eq!(back.state.stuck, st.stuck);
         assert_eq!(back.state.plastic, st.plastic);
+        assert_eq!(back.state.rest_x, st.rest_x);
+        assert_eq!(back.state.mesh.creases, st.mesh.creases);
         assert_eq!(back.state.view_memory, st.view_memory);
         assert_eq!(back.state.buckle, st.buckle);
         for cut in [0, 8, 20, bytes.len() / 2, bytes.len() - 1] {

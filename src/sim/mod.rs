@@ -99,19 +99,18 @@ impl Simulation {
         self.retake_rest_shape()
     }
 
-    /// After the initial relaxation, the rest dihedral angles of cloths that rest in their
-    /// input's shape (`rest_angles: "input"`) become the relaxed shape's, and their plastic shape
-    /// follows with no damage: ARCSim's `reset_plasticity` after `relax_initial_state` under
+    /// After the initial relaxation, the rest embedding and the rest dihedral angles of cloths
+    /// that rest in their input's shape (`rest_angles: "input"`) become the relaxed shape's, and
+    /// their plastic shape follows with no damage: ARCSim's `reset_plasticity` after `relax_initial_state` under
     /// `preserve_creases`, the one case in which its rest angles are not flat. A folded model
     /// (dart.json's paper plane) is then at rest in the shape the relaxation gave it, its folds
-    /// sharp on the remeshed creases, instead of carrying the input's folds through the face
-    /// shape operators of a remesh (`remesh::rest_shape`), which spreads a fold over the faces
-    /// beside it.
+    /// sharp on the remeshed creases.
     fn retake_rest_shape(&mut self) -> Result<(), SimError> {
         if self.scene.cloths.iter().all(|c| c.flat_rest) {
             return Ok(());
         }
         let state = &mut self.state;
+        state.rest_x = state.mesh.positions();
         state.rest_angles = self.scene.rest_angles(&state.mesh);
         if let Some(plastic) = &mut state.plastic {
             plastic.shapes = crate::remesh::rest_shape::face_shapes(&state.mesh, &state.rest_angles);
