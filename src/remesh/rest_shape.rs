@@ -15,12 +15,14 @@
 //! new edges flat and the rest shape a mix. An unchanged neighbourhood gets its angles back
 //! exactly (to rounding); a flat rest shape stays exactly flat.
 //!
-//! Since 2026-12-04 a cloth whose rest shape is its input's carries it as a rest embedding
-//! (`SimState::rest_x`, ARCSim's plastic-space positions) instead, and the new mesh's rest angles
-//! are the embedding's dihedral angles (`sim::adapt`): exact, where solving from the faces'
-//! operators spread a sharp fold over the faces beside it (a face with one folded edge has an
-//! operator whose solution on its split halves bends their other edges too). The operators
-//! below still carry the rest shape of meshes without an embedding and the plastic residuals.
+//! An input that labels creases (a folded model) carries its rest shape as a rest embedding
+//! instead (`Scene::rest_embedded`, `SimState::rest_x`, ARCSim's plastic-space positions), and
+//! the new mesh's rest angles are the embedding's dihedral angles (`sim::adapt`): exact, where
+//! solving from the faces' operators spreads a sharp fold over the faces beside it (a face with
+//! one folded edge has an operator whose solution on its split halves bends their other edges
+//! too). For a smooth curved input that spreading is what is wanted, where an embedding with
+//! linear midpoints would kink it along its input edges. With an embedding the operators carry
+//! only the plastic residuals.
 //!
 //! Under plasticity (`forces::plasticity`, issue 16 item 9) S_f is the plastic shape itself, the
 //! state, not derived from the angles, and each face's damage rides along the same way (a flip

@@ -234,6 +234,17 @@ impl Scene {
         self.flat_where_resting_flat(mesh, crate::forces::edge_angles(mesh))
     }
 
+    /// Whether the rest shape is carried through remeshing as a rest embedding
+    /// (`SimState::rest_x`): when a cloth rests in its input's shape and the input labels
+    /// creases. An embedding keeps every input edge as the sharp fold it is (a split's node at the
+    /// midpoint), right for a folded model (dart.json's paper, ARCSim's `preserve_creases`, which
+    /// also keeps its midpoints linear); a smooth curved input is carried by the faces' shape
+    /// operators instead (`remesh::rest_shape`), which spread its curvature over the refined
+    /// faces rather than kinking them along the input's edges.
+    pub fn rest_embedded(&self) -> bool {
+        !self.mesh.creases.is_empty() && !self.cloths.iter().all(|c| c.flat_rest)
+    }
+
     /// `rest_angles` of the mesh with its nodes at the rest embedding `x` (`SimState::rest_x`).
     pub fn rest_angles_at(&self, mesh: &Mesh, x: &[crate::math::Vec3]) -> Vec<Real> {
         self.flat_where_resting_flat(mesh, crate::forces::edge_angles_at(mesh, x))

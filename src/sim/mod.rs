@@ -110,7 +110,9 @@ impl Simulation {
             return Ok(());
         }
         let state = &mut self.state;
-        state.rest_x = state.mesh.positions();
+        if self.scene.rest_embedded() {
+            state.rest_x = state.mesh.positions();
+        }
         state.rest_angles = self.scene.rest_angles(&state.mesh);
         if let Some(plastic) = &mut state.plastic {
             plastic.shapes = crate::remesh::rest_shape::face_shapes(&state.mesh, &state.rest_angles);

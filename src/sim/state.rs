@@ -31,8 +31,8 @@ pub struct SimState {
     /// Rest dihedral angle of each edge of `mesh`.
     pub rest_angles: Vec<Real>,
     /// Per node, where it is in the rest shape (the rest embedding; ARCSim's plastic-space
-    /// position `y`), when a cloth rests in its input's shape (`rest_angles: "input"`); empty
-    /// when every cloth rests flat. Remeshing carries it with the nodes (a split's node at the
+    /// position `y`), when a cloth rests in its input's shape and the input labels creases
+    /// (`Scene::rest_embedded`); empty otherwise. Remeshing carries it with the nodes (a split's node at the
     /// midpoint) and takes the new edges' rest angles from it (`sim::adapt`).
     pub rest_x: Vec<Vec3>,
     /// Per face, the plastic rest shape and damage (`forces::plasticity`); present when a
@@ -74,9 +74,9 @@ impl SimState {
     pub fn initial(scene: &Scene) -> SimState {
         let mesh = scene.mesh.clone();
         let rest_angles = scene.rest_angles(&mesh);
-        let rest_x = match scene.cloths.iter().all(|c| c.flat_rest) {
-            true => Vec::new(),
-            false => mesh.positions(),
+        let rest_x = match scene.rest_embedded() {
+            true => mesh.positions(),
+            false => Vec::new(),
         };
         let plastic = scene
             .materials
@@ -146,8 +146,7 @@ impl SimState {
         if self.rest_angles.len() != self.mesh.edges.len() {
             return Err(bad(format!("{} rest angles for {} edges", self.rest_angles.len(), self.mesh.edges.len())));
         }
-        let curved = !scene.cloths.iter().all(|c| c.flat_rest);
-        if self.rest_x.len() != if curved { n } else { 0 } {
+        if self.rest_x.len() != if scene.rest_embedded() { n } else { 0 } {
             return Err(bad(format!("{} rest positions for {n} nodes", self.rest_x.len())));
         }
         let plastic = scene.materials.iter().any(|m| m.plasticity.is_some());
