@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 
 mod common;
 
-use common::temp_dir;
+use common::{at_material, temp_dir};
 use serde_json::json;
 use viewcloth::math::{Real, Vec2, Vec3};
 use viewcloth::mesh::Mesh;
@@ -82,21 +82,6 @@ fn scene_file(dir: &Path, labelled: bool) -> PathBuf {
     let file = dir.join(format!("{name}.json"));
     std::fs::write(&file, scene.to_string()).unwrap();
     file
-}
-
-/// World position of material point `u`, by barycentric interpolation in the face holding it.
-fn at_material(mesh: &Mesh, u: Vec2) -> Vec3 {
-    for f in 0..mesh.faces.len() {
-        let [a, b, c] = mesh.face_uv(f);
-        let det = (b - a).perp(&(c - a));
-        let l1 = (u - a).perp(&(c - a)) / det;
-        let l2 = (b - a).perp(&(u - a)) / det;
-        if l1 >= -1e-9 && l2 >= -1e-9 && l1 + l2 <= 1.0 + 1e-9 {
-            let x = mesh.face_nodes(f).map(|n| mesh.nodes[n].x);
-            return x[0] * (1.0 - l1 - l2) + x[1] * l1 + x[2] * l2;
-        }
-    }
-    panic!("material point {u} outside the cloth");
 }
 
 /// The fold angle (degrees) between the wings' directions across the fold, from the material

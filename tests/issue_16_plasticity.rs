@@ -14,9 +14,9 @@ use std::path::{Path, PathBuf};
 
 mod common;
 
-use common::{temp_dir, write_checkpoint};
+use common::{at_material, temp_dir, write_checkpoint};
 use serde_json::{json, Value};
-use viewcloth::math::{Real, Vec2, Vec3};
+use viewcloth::math::{Real, Vec2};
 use viewcloth::mesh::Mesh;
 use viewcloth::scene;
 use viewcloth::sim::checkpoint;
@@ -63,22 +63,6 @@ fn scene_file(
         ]
     });
     write_scene(dir, name, cloth, remesh)
-}
-
-/// World position of material point `u` (metres), by barycentric interpolation in the face
-/// that contains it.
-fn at_material(mesh: &Mesh, u: Vec2) -> Vec3 {
-    for f in 0..mesh.faces.len() {
-        let [a, b, c] = mesh.face_uv(f);
-        let det = (b - a).perp(&(c - a));
-        let l1 = (u - a).perp(&(c - a)) / det;
-        let l2 = (b - a).perp(&(u - a)) / det;
-        if l1 >= -1e-9 && l2 >= -1e-9 && l1 + l2 <= 1.0 + 1e-9 {
-            let x = mesh.face_nodes(f).map(|n| mesh.nodes[n].x);
-            return x[0] * (1.0 - l1 - l2) + x[1] * l1 + x[2] * l2;
-        }
-    }
-    panic!("material point {u} outside the cloth");
 }
 
 /// The fold angle (radians, 0 = flat): π minus the angle between the two wings, each from its

@@ -9,7 +9,8 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 // For the generator's module, which takes them from its parent (as in `src/math`).
-use viewcloth::math::{Real, Vec3};
+use viewcloth::math::{Real, Vec2, Vec3};
+use viewcloth::mesh::Mesh;
 use viewcloth::scene::{self, Scene};
 
 /// One generator for unit and integration tests: the unit tests' file, compiled here too.
@@ -113,4 +114,20 @@ pub fn check_stats_strain(dir: &Path, frames: usize, bound: (Real, Real)) -> ser
     }
     assert!(largest > 1e-5, "{}: no frame strained ({largest})", path.display());
     stats
+}
+
+/// World position of material point `u` (metres), by barycentric interpolation in the face
+/// that contains it.
+pub fn at_material(mesh: &Mesh, u: Vec2) -> Vec3 {
+    for f in 0..mesh.faces.len() {
+        let [a, b, c] = mesh.face_uv(f);
+        let det = (b - a).perp(&(c - a));
+        let l1 = (u - a).perp(&(c - a)) / det;
+        let l2 = (b - a).perp(&(u - a)) / det;
+        if l1 >= -1e-9 && l2 >= -1e-9 && l1 + l2 <= 1.0 + 1e-9 {
+            let x = mesh.face_nodes(f).map(|n| mesh.nodes[n].x);
+            return x[0] * (1.0 - l1 - l2) + x[1] * l1 + x[2] * l2;
+        }
+    }
+    panic!("material point {u} outside the cloth");
 }
