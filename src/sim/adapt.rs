@@ -299,30 +299,21 @@ impl Simulation {
         // plastic shape is the embedding's plus the residual (ARCSim's `restore_residuals`), and
         // the rest angles of elastic cloth are the embedding's own, exactly (a fold stays on its
         // edges; the faces beside it stay flat).
-        let face_shapes = match embedded {
-            true => {
-                state.rest_x = rest_x;
-                let angles = self.scene.rest_angles_at(&state.mesh, &state.rest_x);
-                match state.plastic.is_some() {
-                    true => {
-                        (0..face_shapes.len()).map(|f| face_shapes[f] + face_shape(&state.mesh, f, &angles)).collect()
-                    }
-                    false => {
-                        state.rest_angles = angles;
-                        Vec::new()
-                    }
-                }
+        let embedding = embedded.then(|| self.scene.rest_angles_at(&state.mesh, &rest_x));
+        state.rest_x = rest_x;
+        let plastic_shapes: Vec<Mat2> = match (&embedding, &state.plastic) {
+            (Some(angles), Some(_)) => {
+                (0..face_shapes.len()).map(|f| face_shapes[f] + face_shape(&state.mesh, f, angles)).collect()
             }
-            false => face_shapes,
+            _ => face_shapes,
         };
-        if !(embedded && state.plastic.is_none()) {
-            state.rest_angles = match curved {
-                true => edge_angles_from_shapes(&state.mesh, &face_shapes),
-                false => vec![0.0; state.mesh.edges.len()],
-            };
-        }
+        state.rest_angles = match embedding {
+            Some(angles) if state.plastic.is_none() => angles,
+            _ if curved => edge_angles_from_shapes(&state.mesh, &plastic_shapes),
+            _ => vec![0.0; state.mesh.edges.len()],
+        };
         if let Some(plastic) = &mut state.plastic {
-            *plastic = PlasticState { shapes: face_shapes, damage: face_damage };
+            *plastic = PlasticState { shapes: plastic_shapes, damage: face_damage };
         }
         state.stuck.clear();
         if !groups.iter().all(|&g| g == 0) {
