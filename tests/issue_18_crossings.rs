@@ -4,7 +4,7 @@
 //! and ARCSim conf (`../shared/arcsim`, skipped when absent), each run for a few frames; the
 //! `crossings` command's answers on hand-made frames and bad input; and jittered repeats
 //! (`simulate --jitter-seed`): different seeds give different frames, the same seed the same
-//! bytes. The two hard-start stress scenes are the exceptions the geometry forces, each named
+//! bytes. The hard-start and pinch stress scenes are the exceptions the geometry forces, each named
 //! below (`OVERLAPPING_OBSTACLES`, `STARTS_INSIDE`).
 
 mod common;
@@ -50,18 +50,18 @@ fn count_from_files(dir: &Path) -> (Vec<(usize, usize, usize)>, bool, String) {
     (rows, out.status.success(), String::from_utf8_lossy(&out.stderr).into_owned())
 }
 
-/// Simulates `scene` for `frames` frames with the obstacles exported and returns what is wrong:
-/// a failed run, a frame with crossings in stats.json, a frame whose count from the files
-/// differs, or crossings found by `viewcloth crossings`.
-/// Stress scenes whose cloth starts inside two obstacles that overlap (issue 18, "hard
-/// starts"): no position is outside both, so the cloth held in the overlap crosses both surfaces
-/// for as long as they overlap. Here only their self crossings must be zero; `tests/stress.rs`
+/// Stress scenes whose cloth is inside two obstacles that overlap: from the start (issue 18,
+/// "hard starts") or closed on during the run (`pinch`): no position is outside both, so the
+/// cloth held in the overlap crosses both surfaces for as long as they overlap. Here only their self crossings must be zero; `tests/stress.rs`
 /// asserts that every obstacle crossing of theirs is by a triangle with a node inside both.
-const OVERLAPPING_OBSTACLES: [&str; 1] = ["crush_overlap"];
+const OVERLAPPING_OBSTACLES: [&str; 2] = ["crush_overlap", "pinch"];
 /// Stress scenes whose input state lies partly inside an obstacle (the other hard start): frame 0
 /// is the input as given, crossing by construction; every frame after it must be clear.
 const STARTS_INSIDE: [&str; 1] = ["skirt_inside"];
 
+/// Simulates `scene` for `frames` frames with the obstacles exported and returns what is wrong:
+/// a failed run, a frame with crossings in stats.json, a frame whose count from the files
+/// differs, or crossings found by `viewcloth crossings`.
 fn problems(scene: &Path, frames: usize, out_root: &Path) -> Vec<String> {
     let name = scene.file_stem().unwrap().to_string_lossy().into_owned();
     let trapped = OVERLAPPING_OBSTACLES.contains(&name.as_str());

@@ -143,6 +143,19 @@ fn stresses() -> Vec<Stress> {
             drive_speed: 0.0,
             start: Start::OverlapFrom(3),
         },
+        // Pinched during the run (ARCSim's crush2.json in small): a 30 cm curtain hanging
+        // between two 10 cm spheres 1 cm apart that close on it until they overlap by 3 cm
+        // (0.2 … 0.6 s), then drag it 2 cm down (… 0.9 s). The pinch holds the cloth caught in
+        // it, which follows the spheres down: its 10 cm of free cloth above the lens are
+        // stretched 2 cm (20%), the faces next to the lens most.
+        Stress {
+            file: "pinch.json",
+            frames: 25,
+            edit: keep,
+            strain_bound: 0.4,
+            drive_speed: 0.07,
+            start: Start::OverlapFrom(0),
+        },
         // The skirt's waist (radius 17.5 cm) 5 mm inside hips of radius 18 cm, no handles: the
         // separation stretches the waist over the hips (5%) and friction holds it there.
         Stress {
@@ -308,6 +321,11 @@ fn sphere_fired_through_sheet() {
 #[test]
 fn sheet_crushed_between_plates() {
     check("crush.json");
+}
+
+#[test]
+fn curtain_pinched_between_closing_spheres() {
+    check("pinch.json");
 }
 
 #[test]

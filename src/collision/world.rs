@@ -13,6 +13,7 @@ mod resolve;
 
 use super::areas::ElementAreas;
 use super::broad::{BroadPhase, Candidate, Interval, VF};
+use super::bvh::Aabb;
 use super::geometry::closest_point_triangle;
 use super::obstacle::ObstacleBody;
 use super::params::CollisionParams;
@@ -180,6 +181,18 @@ impl CollisionWorld {
     /// Whether body `b` is present at `t` (its window; only present bodies are queried).
     pub fn present(&self, b: usize, t: Real) -> bool {
         self.bodies[b].present_at(t)
+    }
+
+    /// The bounding box of body `b` at the current step's end (the positions the last `advance`
+    /// moved it to), or at `t` when it was not present then; `None` when absent at `t`.
+    pub fn body_box(&self, b: usize, t: Real) -> Option<Aabb> {
+        if !self.present(b, t) {
+            return None;
+        }
+        Some(match self.present.get(b) == Some(&true) && self.body_start.len() > b + 1 {
+            true => Aabb::from_points(&self.obs_x1[self.body_start[b]..self.body_start[b + 1]]),
+            false => Aabb::from_points(&self.bodies[b].positions_at(t)),
+        })
     }
 
     /// Calls `f` with the signed distance field of body `b` at time `t`. The field is built at

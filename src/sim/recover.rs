@@ -93,17 +93,24 @@ impl FaultStats {
 
 impl Simulation {
     /// One step of size `h`, with fault handling (see the module doc), after the separation
-    /// stage while cloth that started inside an obstacle is not out yet (`separate.rs`).
+    /// stage while cloth that started inside an obstacle is not out yet, or while two obstacles
+    /// are close enough to pinch cloth between them (`separate.rs`).
     pub fn step(&mut self, h: Real) -> Result<(), SimError> {
+        self.release_trapped();
+        self.timed(Stage::Separation, |s| s.separate(h));
+        let t1 = self.state.time + h;
+        let result = self.step_to(h, t1, 0);
+        // The separation's hold is the step's: a remesh after it numbers the nodes anew.
+        self.release_trapped();
+        result
+    }
+
+    /// Forgets the nodes the separation stage holds or exempts from obstacle collisions.
+    fn release_trapped(&mut self) {
         self.ws.trapped.clear();
         if let Some(world) = &mut self.ws.collisions {
             world.exempt.clear();
         }
-        if self.state.separating && !self.scene.disabled.separation {
-            self.timed(Stage::Separation, Simulation::separate);
-        }
-        let t1 = self.state.time + h;
-        self.step_to(h, t1, 0)
     }
 
     fn step_to(&mut self, h: Real, t1: Real, halvings: u32) -> Result<(), SimError> {

@@ -34,9 +34,43 @@
 //! back in as fast as the stage pushes it out. The move is a projection, not a force: the velocity
 //! keeps no part of it, and loses any component against it (inelastic), so the stage adds no
 //! kinetic energy, and the step's fault checks judge the physics that follows unchanged. The
-//! stage switches itself off at the first step that finds no node inside any obstacle (never,
-//! while nodes are trapped).
+//! walk switches itself off at the first step that finds no node inside any obstacle.
+//!
+//! **Pinches during the run.** Two obstacles that close on cloth between them (ARCSim's
+//! `crush2.json`: two spheres that part and meet again on the sheet's edge tucked between them)
+//! leave it no position outside both once their surfaces are nearer than the thickness, and none
+//! at all once they overlap: the impact zones then meet constraints from both sides that no
+//! motion satisfies, every step is retried to the smallest and the strain is driven up (13 at
+//! t = 1.55 s, where the run stopped). ARCSim leaves such impacts unresolved after its iteration
+//! cap and lets the cloth through. Here cloth caught in a pinch is *trapped* like cloth inside
+//! two overlapping obstacles at the start, and for the same reason, held with the pinch's motion
+//! (the mean velocity of the two surfaces at the closest points; zero between obstacles that
+//! stand still) and exempt from obstacle contact and impacts for the step:
+//! - a node within the thickness of two obstacles whose outward normals there are more than
+//!   120° apart (`PINCH_COS`: the surfaces face each other across it; a floor meeting a wall at
+//!   90° leaves a corner the cloth can rest in), or inside two;
+//! - every node of a cloth face within the thickness of a *pinch point*: a point sampled on one
+//!   obstacle's face (vertices, edge midpoints, centroid) within twice the thickness of another
+//!   obstacle's surface (either side), whose normal there faces it (`PINCH_COS`), the two
+//!   surfaces closing on each other (`CLOSING`). A cloth face larger than the pinch (3 cm faces
+//!   between spheres whose gap is under 2 mm over a 3 cm disc) has its nodes outside it, and
+//!   the obstacles' vertices pierce it from both sides. Parts of one body that overlap at its
+//!   joints (ARCSim's dancer is 18 obstacles) cross at such angles along thousands of points;
+//!   without the closing test the dress over them was held there and crossed by the body
+//!   (`dress_dance`, 12 crossing pairs at frame 1).
+//!
+//! So the stage runs at every step at which two present obstacles' bounding boxes come within
+//! twice the thickness of each other (a test on boxes; nothing is queried otherwise), and
+//! outside the start's separation only traps: a node released from a pinch inside one obstacle
+//! is left to the contacts and impact zones, as anywhere else in a run (walking it out, a
+//! projection no collision stage checks, pushed it through the cloth layers beside it). Cloth
+//! held in a pinch crosses the obstacles there, as in ARCSim; nowhere else.
 
+use rayon::prelude::*;
+
+use crate::collision::bvh::Aabb;
+use crate::collision::geometry::closest_point_triangle;
+use crate::collision::sdf::SdfHit;
 use crate::math::{Real, Vec3};
 
 use super::Simulation;
@@ -45,41 +79,274 @@ use super::Simulation;
 /// thickness, so a node comes within the next step's proximity search of any cloth it nears.
 pub const SEPARATION_STEP: Real = 0.5;
 
+/// Two obstacle surfaces pinch a node when it lies within the thickness of both and their
+/// outward normals there are more than 120° apart (cos < −½): they face each other across it. A
+/// floor meeting a wall (90°) leaves a corner the cloth can rest in; it is not a pinch.
+pub const PINCH_COS: Real = -0.5;
+
+/// Where two obstacles' surfaces face each other (normals more than 120° apart) within twice
+/// the thickness, or overlap: a point sampled on one (a vertex, edge midpoint or centroid of
+/// one of its faces) with the velocity of the pinch there (the mean of both surfaces').
+struct Pinch {
+    x: Vec3,
+    v: Vec3,
+}
+
+/// Barycentric weights of the samples a face gives `pinch_points`: centroid, vertices, edge
+/// midpoints.
+const FACE_SAMPLES: [[Real; 3]; 7] = [
+    [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
+    [1.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0],
+    [0.0, 0.0, 1.0],
+    [0.5, 0.5, 0.0],
+    [0.0, 0.5, 0.5],
+    [0.5, 0.0, 0.5],
+];
+
+/// A pinch point's two surfaces close on each other by at least this fraction of the thickness
+/// per step (a guard against round-off between bodies that move together).
+pub const CLOSING: Real = 1e-3;
+
+/// What one node's queries found: the bodies it is within the thickness of (or inside).
+#[derive(Default)]
+struct NodeHits {
+    /// (body, hit) for every body with signed distance below the thickness.
+    near: Vec<(usize, SdfHit)>,
+}
+
+impl NodeHits {
+    fn inside(&self) -> usize {
+        self.near.iter().filter(|(_, h)| h.distance < 0.0).count()
+    }
+
+    /// Inside two bodies, or within the thickness of two whose surfaces face each other.
+    fn trapped(&self) -> bool {
+        self.inside() > 1
+            || self
+                .near
+                .iter()
+                .enumerate()
+                .any(|(k, (_, a))| self.near[k + 1..].iter().any(|(_, b)| a.normal.dot(&b.normal) < PINCH_COS))
+    }
+}
+
 impl Simulation {
-    /// One separation step (see the module doc), while `SimState::separating`. Returns how
-    /// many nodes moved.
-    pub(super) fn separate(&mut self) -> usize {
-        let Some(world) = &self.ws.collisions else { return 0 };
-        if !self.state.separating {
-            return 0;
+    /// Whether a step must run the separation stage: cloth is being separated, or two present
+    /// obstacles come within the thickness of each other so that cloth between them may be
+    /// pinched (see the module doc). False when the scene switches the stage off.
+    fn separation_due(&self) -> bool {
+        let Some(world) = &self.ws.collisions else { return false };
+        if self.scene.disabled.separation {
+            return false;
+        }
+        if self.state.separating {
+            return true;
         }
         let th = world.params.thickness;
         let t = self.state.time;
+        let boxes: Vec<_> =
+            (0..world.bodies.len()).filter_map(|b| world.body_box(b, t)).map(|b| b.inflate(th)).collect();
+        boxes.iter().enumerate().any(|(k, a)| boxes[k + 1..].iter().any(|b| a.overlaps(b)))
+    }
+
+    /// One separation step of a step of length `h` (see the module doc), when
+    /// `separation_due`. Returns how many nodes moved.
+    pub(super) fn separate(&mut self, h: Real) -> usize {
+        if !self.separation_due() {
+            return 0;
+        }
+        let Some(world) = &self.ws.collisions else { return 0 };
+        let separating = self.state.separating;
+        let th = world.params.thickness;
+        let t = self.state.time;
         let x = self.state.mesh.positions();
-        let mut push = vec![Vec3::zeros(); x.len()];
-        let mut inside = vec![0usize; x.len()];
-        let mut deep = vec![false; x.len()];
-        for b in (0..world.bodies.len()).filter(|&b| world.present(b, t)) {
-            let hits = world.with_sdf(b, t, |sdf| sdf.query_inside(&x));
-            for (i, q) in hits.into_iter().enumerate() {
-                let Some(q) = q else { continue };
-                push[i] += q.point + q.normal * th - x[i];
-                inside[i] += 1;
-                deep[i] |= -q.distance > th;
+        // Per body, the nodes that may lie within the thickness of it (or inside it, anywhere,
+        // for an open body while separating: its inside is a half-space).
+        let present: Vec<usize> = (0..world.bodies.len()).filter(|&b| world.present(b, t)).collect();
+        let boxes: Vec<_> = present.iter().map(|&b| world.body_box(b, t).map(|bx| bx.inflate(th))).collect();
+        let reach: Vec<Vec<bool>> = present
+            .iter()
+            .zip(&boxes)
+            .map(|(&b, bx)| {
+                let open = separating && !world.with_sdf(b, t, |sdf| sdf.is_closed());
+                x.iter().map(|p| open || bx.is_some_and(|bx| bx.distance_squared(p) == 0.0)).collect()
+            })
+            .collect();
+        // Outside separation only pinches matter: nodes within reach of two bodies.
+        let counts: Vec<usize> = (0..x.len()).map(|i| reach.iter().filter(|r| r[i]).count()).collect();
+        let asked = |i: usize| separating || counts[i] > 1;
+        let mut hits: Vec<NodeHits> = (0..x.len()).map(|_| NodeHits::default()).collect();
+        for (k, &b) in present.iter().enumerate() {
+            let found: Vec<Option<SdfHit>> = world.with_sdf(b, t, |sdf| {
+                x.par_iter()
+                    .enumerate()
+                    .map(|(i, p)| match reach[k][i] && asked(i) {
+                        true => sdf.query(p).filter(|q| q.distance < th),
+                        false => None,
+                    })
+                    .collect()
+            });
+            for (i, q) in found.into_iter().enumerate() {
+                if let Some(q) = q {
+                    hits[i].near.push((b, q));
+                }
             }
         }
+        let mut trapped: Vec<bool> = hits.iter().map(NodeHits::trapped).collect();
+        let mut velocity = self.pinch_velocities(&hits, &trapped, h);
+        // A cloth face the obstacles pinch between its nodes (a face larger than the pinch) is
+        // held whole: the nodes alone do not see it.
+        let pinches = self.pinch_points(h);
+        for (i, v) in self.faces_at_pinches(&pinches) {
+            if !trapped[i] {
+                trapped[i] = true;
+                velocity[i] = v;
+            }
+        }
+        self.ws.trapped = (0..x.len()).filter(|&i| trapped[i]).map(|i| (i, velocity[i])).collect();
+        let moved = if separating { self.walk_out(&hits, &trapped) } else { 0 };
+        let exempt: Vec<bool> = hits
+            .iter()
+            .zip(&trapped)
+            .map(|(n, &tr)| tr || (separating && n.near.iter().any(|(_, q)| -q.distance > th)))
+            .collect();
+        let any_trapped = trapped.iter().any(|&tr| tr);
+        if let Some(world) = &mut self.ws.collisions {
+            world.exempt = if separating || any_trapped { exempt } else { Vec::new() };
+        }
+        self.state.separating = separating && hits.iter().any(|n| n.inside() > 0);
+        moved
+    }
+
+    /// Each trapped node with the velocity of the pinch over the step of length `h`: the mean of
+    /// the velocities of the surfaces it is near, at the closest points (zero between obstacles
+    /// that stand still).
+    fn pinch_velocities(&self, hits: &[NodeHits], trapped: &[bool], h: Real) -> Vec<Vec3> {
+        let mut out = vec![Vec3::zeros(); hits.len()];
+        let Some(world) = &self.ws.collisions else { return out };
+        let t1 = self.state.time + h;
+        let mut moved: Vec<Option<Vec<Vec3>>> = vec![None; world.bodies.len()];
+        for (i, n) in hits.iter().enumerate().filter(|&(i, _)| trapped[i]) {
+            let mut v = Vec3::zeros();
+            for (b, q) in &n.near {
+                let body = &world.bodies[*b];
+                if body.is_static() {
+                    continue;
+                }
+                let x1 = moved[*b].get_or_insert_with(|| body.positions_at(t1));
+                let tri = body.triangles()[q.triangle];
+                let p1: Vec3 = tri.iter().zip(&q.bary).map(|(&k, &w)| x1[k] * w).sum();
+                v += (p1 - q.point) / h;
+            }
+            out[i] = v / n.near.len() as Real;
+        }
+        out
+    }
+
+    /// The points where two present obstacles pinch (`Pinch`), sampled on every face of one
+    /// that lies within reach of the other, with their velocities over a step of length `h`.
+    fn pinch_points(&self, h: Real) -> Vec<Pinch> {
+        let Some(world) = &self.ws.collisions else { return Vec::new() };
+        let reach = 2.0 * world.params.thickness;
+        let t = self.state.time;
+        let boxes: Vec<_> = (0..world.bodies.len()).map(|b| world.body_box(b, t).map(|bx| bx.inflate(reach))).collect();
+        let mut out = Vec::new();
+        for (a, b) in (0..boxes.len()).flat_map(|a| (0..boxes.len()).map(move |b| (a, b))) {
+            let (Some(box_a), Some(box_b)) = (boxes[a], boxes[b]) else { continue };
+            if a == b || !box_a.overlaps(&box_b) {
+                continue;
+            }
+            // Samples of a's faces inside b's box, each with a's face normal there.
+            let samples: Vec<(usize, [Real; 3], Vec3, Vec3)> = world.with_sdf(a, t, |sdf| {
+                let x = sdf.positions();
+                let faces = sdf.triangles().iter().enumerate();
+                let near = faces.filter(|(_, f)| box_b.overlaps(&Aabb::from_points(f.iter().map(|&k| &x[k]))));
+                near.flat_map(|(f, tri)| {
+                    let n = sdf.face_normal(f);
+                    FACE_SAMPLES.iter().map(move |w| (f, *w, (0..3).map(|k| x[tri[k]] * w[k]).sum(), n))
+                })
+                .filter(|(_, _, p, _)| box_b.distance_squared(p) == 0.0)
+                .collect()
+            });
+            if samples.is_empty() {
+                continue;
+            }
+            let found: Vec<Option<SdfHit>> = world.with_sdf(b, t, |sdf| {
+                samples
+                    .par_iter()
+                    .map(|(_, _, p, n)| {
+                        sdf.query(p).filter(|q| q.distance.abs() < reach && q.normal.dot(n) < PINCH_COS)
+                    })
+                    .collect()
+            });
+            let (body_a, body_b) = (&world.bodies[a], &world.bodies[b]);
+            let x1_a = (!body_a.is_static()).then(|| body_a.positions_at(t + h));
+            let x1_b = (!body_b.is_static()).then(|| body_b.positions_at(t + h));
+            let at = |x1: &Option<Vec<Vec3>>, tri: [usize; 3], w: &[Real; 3], p: &Vec3| match x1 {
+                Some(x1) => ((0..3).map(|k| x1[tri[k]] * w[k]).sum::<Vec3>() - p) / h,
+                None => Vec3::zeros(),
+            };
+            for ((f, w, p, _), q) in samples.iter().zip(found) {
+                let Some(q) = q else { continue };
+                let v_a = at(&x1_a, body_a.triangles()[*f], w, p);
+                let v_b = at(&x1_b, body_b.triangles()[q.triangle], &q.bary, &q.point);
+                // The gap's rate of change is (v_a − v_b)·n_b: only a closing pinch squeezes.
+                if (v_a - v_b).dot(&q.normal) * h < -CLOSING * world.params.thickness {
+                    out.push(Pinch { x: *p, v: 0.5 * (v_a + v_b) });
+                }
+            }
+        }
+        out
+    }
+
+    /// The nodes of every cloth face within the thickness of a pinch point, each with that
+    /// pinch's velocity (the first pinch found for it).
+    fn faces_at_pinches(&self, pinches: &[Pinch]) -> Vec<(usize, Vec3)> {
+        let Some(world) = &self.ws.collisions else { return Vec::new() };
+        if pinches.is_empty() {
+            return Vec::new();
+        }
+        let th = world.params.thickness;
+        let all = Aabb::from_points(pinches.iter().map(|p| &p.x)).inflate(th);
+        let x = self.state.mesh.positions();
+        let mut out: Vec<(usize, Vec3)> = Vec::new();
+        for f in 0..self.state.mesh.faces.len() {
+            let tri = self.state.mesh.face_nodes(f);
+            let [a, b, c] = tri.map(|i| &x[i]);
+            let bx = Aabb::from_points([a, b, c]);
+            if !bx.overlaps(&all) {
+                continue;
+            }
+            let bx = bx.inflate(th);
+            let hit = pinches
+                .iter()
+                .find(|p| bx.distance_squared(&p.x) == 0.0 && closest_point_triangle(&p.x, a, b, c).dist < th);
+            if let Some(p) = hit {
+                out.extend(tri.map(|i| (i, p.v)));
+            }
+        }
+        out
+    }
+
+    /// Moves every free node inside exactly one obstacle a bounded step out of it (the module
+    /// doc's gradient step); returns how many moved.
+    fn walk_out(&mut self, hits: &[NodeHits], trapped: &[bool]) -> usize {
+        let Some(world) = &self.ws.collisions else { return 0 };
+        let th = world.params.thickness;
         // Nodes of handles that are on follow them; a handle that switches on later anchors its
         // nodes where the separation has put them.
-        let mut held = vec![false; x.len()];
+        let mut held = vec![false; hits.len()];
         let on = self.state.handle_nodes.iter().zip(&self.state.handle_on).filter(|(_, on)| on.is_some());
         on.flat_map(|(nodes, _)| nodes).for_each(|&i| held[i] = true);
         let limit = SEPARATION_STEP * th;
         let mut moved = 0;
         for (i, node) in self.state.mesh.nodes.iter_mut().enumerate() {
-            if inside[i] != 1 || held[i] || node.mass <= 0.0 {
+            if trapped[i] || held[i] || node.mass <= 0.0 {
                 continue;
             }
-            let d = push[i];
+            let Some((_, q)) = hits[i].near.iter().find(|(_, q)| q.distance < 0.0) else { continue };
+            let d = q.point + q.normal * th - node.x;
             let len = d.norm();
             if len == 0.0 {
                 continue;
@@ -92,11 +359,6 @@ impl Simulation {
             }
             moved += 1;
         }
-        self.ws.trapped = (0..x.len()).filter(|&i| inside[i] > 1).collect();
-        if let Some(world) = &mut self.ws.collisions {
-            world.exempt = inside.iter().zip(&deep).map(|(&k, &d)| k > 1 || d).collect();
-        }
-        self.state.separating = inside.iter().any(|&k| k > 0);
         moved
     }
 }

@@ -176,11 +176,11 @@ impl Simulation {
     }
 
     /// The velocity over the step of length `h` that takes every node an exact handle holds
-    /// onto its target; zero for the nodes trapped inside two obstacles (`separate.rs`).
+    /// onto its target; the pinch's for the nodes trapped between two obstacles (`separate.rs`).
     fn pinned_velocities(&self, exact: &[(usize, Vec3)], h: Real) -> Vec<Option<Vec3>> {
         let mut pinned = vec![None; self.state.mesh.nodes.len()];
-        for &n in &self.ws.trapped {
-            pinned[n] = Some(Vec3::zeros());
+        for &(n, v) in &self.ws.trapped {
+            pinned[n] = Some(v);
         }
         for &(n, target) in exact {
             pinned[n] = Some((target - self.state.mesh.nodes[n].x) / h);

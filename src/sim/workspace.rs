@@ -8,7 +8,7 @@ use crate::collision::proximity::Contact;
 use crate::collision::world::{CollisionCounters, CollisionWorld};
 use crate::forces::material::Material;
 use crate::forces::RestState;
-use crate::math::Real;
+use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
 use crate::remesh::RemeshStats;
 use crate::scene::Scene;
@@ -46,9 +46,10 @@ pub struct Workspace {
     pub faults: FaultStats,
     /// Present when a cloth has long range attachments or strain limits.
     pub constraints: Option<Constraints>,
-    /// Cloth nodes inside two obstacles at the current step, held where they are
-    /// (`separate.rs`); empty unless the separation stage runs.
-    pub trapped: Vec<usize>,
+    /// Cloth nodes pinched between two obstacles (or inside both) at the current step, each
+    /// with the pinch's velocity, which holds them (`separate.rs`); empty unless the separation
+    /// stage runs.
+    pub trapped: Vec<(usize, Vec3)>,
     /// The last view factors computed (`adapt::face_views`) and the fingerprint of the state
     /// they were computed for: the frame end's stats and the next frame's remesh see the same
     /// state, so the second reuses the first.
