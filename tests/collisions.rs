@@ -632,3 +632,26 @@ fn inflating_sphere_sequence_is_interpolated_and_the_cloth_on_it_never_penetrate
     // The sheet rode up with the sphere (its middle now rests on r = 0.3).
     assert!(lifted > 0.295, "the sheet's middle only reached z = {lifted:.3}");
 }
+
+/// Issue 16 (ARCSim's crush2.json): cloth that two obstacles close on is held by the pinch and
+/// follows it. The stress curtain's centre, caught between two spheres that meet on it
+/// (0.2 … 0.6 s) and then move 2 cm down (… 0.9 s), ends 2 cm lower and between them; before
+/// the pinch rule the run stopped at frame 10, the strain driven to 1.2 by impacts from both
+/// spheres. (`tests/stress.rs` checks its strain, energy and crossings frame by frame.)
+#[test]
+fn cloth_caught_between_closing_spheres_follows_the_pinch() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/stress/pinch.json");
+    let scene = scene::load_file(&path).unwrap();
+    let frames = scene.frames;
+    let mut sim = Simulation::new(scene).unwrap();
+    // Node 60 is the middle of the 11 × 11 grid: (0, 0, 0), where the spheres meet.
+    let start = sim.state.mesh.nodes[60].x;
+    assert!(start.norm() < 1e-12, "the curtain's middle starts at {start:?}");
+    for f in 1..=frames {
+        sim.advance_frame().unwrap_or_else(|e| panic!("frame {f}: {e}"));
+    }
+    let end = sim.state.mesh.nodes[60].x;
+    let drop = start.z - end.z;
+    assert!((drop - 0.02).abs() < 1e-3, "the pinched middle moved down {drop} m with the spheres (2 cm)");
+    assert!(end.x.abs() < 1e-3 && end.y.abs() < 1e-3, "the pinched middle left the pinch: {end:?}");
+}
