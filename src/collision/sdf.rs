@@ -146,11 +146,6 @@ impl MeshSdf {
         &self.x
     }
 
-    /// Unit normal of triangle `f` (zero for a degenerate one).
-    pub fn face_normal(&self, f: usize) -> Vec3 {
-        self.face_normal[f]
-    }
-
     pub fn triangles(&self) -> &[[usize; 3]] {
         &self.triangles
     }

@@ -183,15 +183,22 @@ impl CollisionWorld {
         self.bodies[b].present_at(t)
     }
 
+    /// World positions of body `b`'s vertices at the current step's end (where the last
+    /// `advance` moved it), when it takes part in the step.
+    pub fn body_positions(&self, b: usize) -> Option<&[Vec3]> {
+        (self.present.get(b) == Some(&true) && self.body_start.len() > b + 1)
+            .then(|| &self.obs_x1[self.body_start[b]..self.body_start[b + 1]])
+    }
+
     /// The bounding box of body `b` at the current step's end (the positions the last `advance`
     /// moved it to), or at `t` when it was not present then; `None` when absent at `t`.
     pub fn body_box(&self, b: usize, t: Real) -> Option<Aabb> {
         if !self.present(b, t) {
             return None;
         }
-        Some(match self.present.get(b) == Some(&true) && self.body_start.len() > b + 1 {
-            true => Aabb::from_points(&self.obs_x1[self.body_start[b]..self.body_start[b + 1]]),
-            false => Aabb::from_points(&self.bodies[b].positions_at(t)),
+        Some(match self.body_positions(b) {
+            Some(x) => Aabb::from_points(x),
+            None => Aabb::from_points(&self.bodies[b].positions_at(t)),
         })
     }
 

@@ -316,6 +316,8 @@ impl Simulation {
             *plastic = PlasticState { shapes: plastic_shapes, damage: face_damage };
         }
         state.stuck.clear();
+        state.pinched = state.pinched.iter().filter_map(|&i| node_map[i]).collect();
+        state.pinched.sort_unstable();
         if !groups.iter().all(|&g| g == 0) {
             self.rings_remeshed(&groups);
         }

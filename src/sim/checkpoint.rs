@@ -24,7 +24,7 @@ use super::state::PlasticState;
 use super::SimState;
 
 const MAGIC: &[u8; 8] = b"VCLOTHCK";
-const FORMAT_VERSION: u32 = 10;
+const FORMAT_VERSION: u32 = 11;
 /// File names: `checkpoint_<frame>.bin`.
 const PREFIX: &str = "checkpoint_";
 const SUFFIX: &str = ".bin";
@@ -225,6 +225,8 @@ pub fn encode(run: &RunRecord, st: &SimState, stats: &RunStats) -> Vec<u8> {
     }
     w.usize(st.stuck.len());
     st.stuck.iter().flatten().for_each(|&i| w.usize(i));
+    w.usize(st.pinched.len());
+    st.pinched.iter().for_each(|&i| w.usize(i));
     w.usize(st.view_memory.len());
     st.view_memory.iter().for_each(|&m| w.f64(m));
     w.usize(st.buckle.len());
@@ -359,6 +361,8 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
     let ns = r.count(32)?;
     let stuck =
         (0..ns).map(|_| Ok([r.usize()?, r.usize()?, r.usize()?, r.usize()?])).collect::<Result<Vec<_>, String>>()?;
+    let nq = r.count(8)?;
+    let pinched = (0..nq).map(|_| r.usize()).collect::<Result<Vec<_>, String>>()?;
     let nm = r.count(8)?;
     let view_memory = (0..nm).map(|_| r.f64()).collect::<Result<Vec<_>, String>>()?;
     let nb = r.count(8)?;
@@ -381,6 +385,7 @@ fn decode(bytes: &[u8]) -> Result<Checkpoint, String> {
         handle_on,
         extra_pairs,
         stuck,
+        pinched,
         view_memory,
         buckle,
     };
@@ -483,6 +488,7 @@ mod tests {
             handle_on: vec![Some(HandleOn { time: 0.5, x: vec![Vec3::new(1.0, 2.0, 3.0), Vec3::new(0.0, -1.0, 0.5)] })],
             extra_pairs: vec![(3, 1)],
             stuck: vec![[0, 1, 2, 9]],
+            pinched: vec![4, 7],
             view_memory: vec![0.25; 9],
             buckle: vec![0.5; 8],
         };
@@ -506,6 +512,7 @@ mod tests {
         assert_eq!(back.state.extra_pairs, st.extra_pairs);
         assert_eq!(back.state.handle_on, st.handle_on);
         assert_eq!(back.state.stuck, st.stuck);
+        assert_eq!(back.state.pinched, st.pinched);
         assert_eq!(back.state.plastic, st.plastic);
         assert_eq!(back.state.rest_x, st.rest_x);
         assert_eq!(back.state.mesh.creases, st.mesh.creases);

@@ -11,6 +11,7 @@ pub mod constrain;
 mod handles;
 pub mod interrupt;
 pub mod output;
+mod pinch;
 mod plastic;
 pub mod pop;
 pub mod progress;

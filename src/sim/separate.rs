@@ -64,49 +64,20 @@
 //! outside the start's separation only traps: a node released from a pinch inside one obstacle
 //! is left to the contacts and impact zones, as anywhere else in a run (walking it out, a
 //! projection no collision stage checks, pushed it through the cloth layers beside it). Cloth
-//! held in a pinch crosses the obstacles there, as in ARCSim; nowhere else.
+//! held in a pinch crosses the obstacles there, as in ARCSim; nowhere else. Where the bands
+//! and pinch points are found, from local geometry only, is `pinch.rs`.
 
 use rayon::prelude::*;
 
-use crate::collision::bvh::Aabb;
-use crate::collision::geometry::closest_point_triangle;
 use crate::collision::sdf::SdfHit;
 use crate::math::{Real, Vec3};
 
+use super::pinch::{self, BandCache, PINCH_COS};
 use super::Simulation;
 
 /// Largest separation move of a node in one step, in repulsion thicknesses: less than the
 /// thickness, so a node comes within the next step's proximity search of any cloth it nears.
 pub const SEPARATION_STEP: Real = 0.5;
-
-/// Two obstacle surfaces pinch a node when it lies within the thickness of both and their
-/// outward normals there are more than 120° apart (cos < −½): they face each other across it. A
-/// floor meeting a wall (90°) leaves a corner the cloth can rest in; it is not a pinch.
-pub const PINCH_COS: Real = -0.5;
-
-/// Where two obstacles' surfaces face each other (normals more than 120° apart) within twice
-/// the thickness, or overlap: a point sampled on one (a vertex, edge midpoint or centroid of
-/// one of its faces) with the velocity of the pinch there (the mean of both surfaces').
-struct Pinch {
-    x: Vec3,
-    v: Vec3,
-}
-
-/// Barycentric weights of the samples a face gives `pinch_points`: centroid, vertices, edge
-/// midpoints.
-const FACE_SAMPLES: [[Real; 3]; 7] = [
-    [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
-    [1.0, 0.0, 0.0],
-    [0.0, 1.0, 0.0],
-    [0.0, 0.0, 1.0],
-    [0.5, 0.5, 0.0],
-    [0.0, 0.5, 0.5],
-    [0.5, 0.0, 0.5],
-];
-
-/// A pinch point's two surfaces close on each other by at least this fraction of the thickness
-/// per step (a guard against round-off between bodies that move together).
-pub const CLOSING: Real = 1e-3;
 
 /// What one node's queries found: the bodies it is within the thickness of (or inside).
 #[derive(Default)]
@@ -140,7 +111,7 @@ impl Simulation {
         if self.scene.disabled.separation {
             return false;
         }
-        if self.state.separating {
+        if self.state.separating || !self.state.pinched.is_empty() {
             return true;
         }
         let th = world.params.thickness;
@@ -161,35 +132,58 @@ impl Simulation {
         let th = world.params.thickness;
         let t = self.state.time;
         let x = self.state.mesh.positions();
-        // Per body, the nodes that may lie within the thickness of it (or inside it, anywhere,
-        // for an open body while separating: its inside is a half-space).
         let present: Vec<usize> = (0..world.bodies.len()).filter(|&b| world.present(b, t)).collect();
-        let boxes: Vec<_> = present.iter().map(|&b| world.body_box(b, t).map(|bx| bx.inflate(th))).collect();
-        let reach: Vec<Vec<bool>> = present
-            .iter()
-            .zip(&boxes)
-            .map(|(&b, bx)| {
-                let open = separating && !world.with_sdf(b, t, |sdf| sdf.is_closed());
-                x.iter().map(|p| open || bx.is_some_and(|bx| bx.distance_squared(p) == 0.0)).collect()
-            })
+        let cloth: Vec<([usize; 3], [Vec3; 3])> = (0..self.state.mesh.faces.len())
+            .map(|f| self.state.mesh.face_nodes(f))
+            .map(|n| (n, n.map(|i| x[i])))
             .collect();
-        // Outside separation only pinches matter: nodes within reach of two bodies.
-        let counts: Vec<usize> = (0..x.len()).map(|i| reach.iter().filter(|r| r[i]).count()).collect();
-        let asked = |i: usize| separating || counts[i] > 1;
-        let mut hits: Vec<NodeHits> = (0..x.len()).map(|_| NodeHits::default()).collect();
-        for (k, &b) in present.iter().enumerate() {
+        let corners: Vec<[Vec3; 3]> = cloth.iter().map(|(_, c)| *c).collect();
+        let positions = pinch::body_positions(world, t);
+        let present_now: Vec<bool> = positions.iter().map(Option::is_some).collect();
+        let frame = self.state.frame;
+        if !self.ws.pinch_faces.as_ref().is_some_and(|c| c.holds(frame, &present_now)) {
+            self.ws.pinch_faces = Some(BandCache::new(world, &positions, t, self.scene.frame_time, frame));
+        }
+        let cache = self.ws.pinch_faces.as_ref().expect("built above");
+        let bands = pinch::bands(world, &positions, cache, &corners);
+        // Nodes near both sides of a band, from the band's faces; while separating, every node
+        // within an obstacle's box (anywhere for an open one: its inside is a half-space) from
+        // its distance field, as is a node held at the last step, wherever it is (the pinch may
+        // have closed past it: inside both obstacles, far from where their surfaces meet).
+        let mut hits: Vec<NodeHits> = match separating {
+            true => (0..x.len()).map(|_| NodeHits::default()).collect(),
+            false => pinch::node_hits(&bands, &x, th).into_iter().map(|near| NodeHits { near }).collect(),
+        };
+        let mut asked: Vec<Vec<bool>> = vec![vec![false; x.len()]; world.bodies.len()];
+        for &b in &present {
+            let bx = world.body_box(b, t).map(|bx| bx.inflate(th));
+            let within = |p: &Vec3| bx.is_some_and(|bx| bx.distance_squared(p) == 0.0);
+            if separating {
+                let open = !world.with_sdf(b, t, |sdf| sdf.is_closed());
+                asked[b] = x.iter().map(|p| open || within(p)).collect();
+            }
+            for &i in &self.state.pinched {
+                asked[b][i] |= within(&x[i]);
+            }
+        }
+        for &b in &present {
+            if !asked[b].iter().any(|&r| r) {
+                continue;
+            }
             let found: Vec<Option<SdfHit>> = world.with_sdf(b, t, |sdf| {
                 x.par_iter()
-                    .enumerate()
-                    .map(|(i, p)| match reach[k][i] && asked(i) {
+                    .zip(&asked[b])
+                    .map(|(p, &asked)| match asked {
                         true => sdf.query(p).filter(|q| q.distance < th),
                         false => None,
                     })
                     .collect()
             });
             for (i, q) in found.into_iter().enumerate() {
-                if let Some(q) = q {
-                    hits[i].near.push((b, q));
+                let Some(q) = q else { continue };
+                match hits[i].near.iter_mut().find(|(k, _)| *k == b) {
+                    Some((_, old)) => *old = q,
+                    None => hits[i].near.push((b, q)),
                 }
             }
         }
@@ -197,14 +191,15 @@ impl Simulation {
         let mut velocity = self.pinch_velocities(&hits, &trapped, h);
         // A cloth face the obstacles pinch between its nodes (a face larger than the pinch) is
         // held whole: the nodes alone do not see it.
-        let pinches = self.pinch_points(h);
-        for (i, v) in self.faces_at_pinches(&pinches) {
+        let pinches = pinch::pinch_points(world, &bands, t, h);
+        for (i, v) in pinch::faces_at_pinches(&pinches, &cloth, th) {
             if !trapped[i] {
                 trapped[i] = true;
                 velocity[i] = v;
             }
         }
         self.ws.trapped = (0..x.len()).filter(|&i| trapped[i]).map(|i| (i, velocity[i])).collect();
+        self.state.pinched = self.ws.trapped.iter().map(|&(i, _)| i).collect();
         let moved = if separating { self.walk_out(&hits, &trapped) } else { 0 };
         let exempt: Vec<bool> = hits
             .iter()
@@ -240,91 +235,6 @@ impl Simulation {
                 v += (p1 - q.point) / h;
             }
             out[i] = v / n.near.len() as Real;
-        }
-        out
-    }
-
-    /// The points where two present obstacles pinch (`Pinch`), sampled on every face of one
-    /// that lies within reach of the other, with their velocities over a step of length `h`.
-    fn pinch_points(&self, h: Real) -> Vec<Pinch> {
-        let Some(world) = &self.ws.collisions else { return Vec::new() };
-        let reach = 2.0 * world.params.thickness;
-        let t = self.state.time;
-        let boxes: Vec<_> = (0..world.bodies.len()).map(|b| world.body_box(b, t).map(|bx| bx.inflate(reach))).collect();
-        let mut out = Vec::new();
-        for (a, b) in (0..boxes.len()).flat_map(|a| (0..boxes.len()).map(move |b| (a, b))) {
-            let (Some(box_a), Some(box_b)) = (boxes[a], boxes[b]) else { continue };
-            if a == b || !box_a.overlaps(&box_b) {
-                continue;
-            }
-            // Samples of a's faces inside b's box, each with a's face normal there.
-            let samples: Vec<(usize, [Real; 3], Vec3, Vec3)> = world.with_sdf(a, t, |sdf| {
-                let x = sdf.positions();
-                let faces = sdf.triangles().iter().enumerate();
-                let near = faces.filter(|(_, f)| box_b.overlaps(&Aabb::from_points(f.iter().map(|&k| &x[k]))));
-                near.flat_map(|(f, tri)| {
-                    let n = sdf.face_normal(f);
-                    FACE_SAMPLES.iter().map(move |w| (f, *w, (0..3).map(|k| x[tri[k]] * w[k]).sum(), n))
-                })
-                .filter(|(_, _, p, _)| box_b.distance_squared(p) == 0.0)
-                .collect()
-            });
-            if samples.is_empty() {
-                continue;
-            }
-            let found: Vec<Option<SdfHit>> = world.with_sdf(b, t, |sdf| {
-                samples
-                    .par_iter()
-                    .map(|(_, _, p, n)| {
-                        sdf.query(p).filter(|q| q.distance.abs() < reach && q.normal.dot(n) < PINCH_COS)
-                    })
-                    .collect()
-            });
-            let (body_a, body_b) = (&world.bodies[a], &world.bodies[b]);
-            let x1_a = (!body_a.is_static()).then(|| body_a.positions_at(t + h));
-            let x1_b = (!body_b.is_static()).then(|| body_b.positions_at(t + h));
-            let at = |x1: &Option<Vec<Vec3>>, tri: [usize; 3], w: &[Real; 3], p: &Vec3| match x1 {
-                Some(x1) => ((0..3).map(|k| x1[tri[k]] * w[k]).sum::<Vec3>() - p) / h,
-                None => Vec3::zeros(),
-            };
-            for ((f, w, p, _), q) in samples.iter().zip(found) {
-                let Some(q) = q else { continue };
-                let v_a = at(&x1_a, body_a.triangles()[*f], w, p);
-                let v_b = at(&x1_b, body_b.triangles()[q.triangle], &q.bary, &q.point);
-                // The gap's rate of change is (v_a − v_b)·n_b: only a closing pinch squeezes.
-                if (v_a - v_b).dot(&q.normal) * h < -CLOSING * world.params.thickness {
-                    out.push(Pinch { x: *p, v: 0.5 * (v_a + v_b) });
-                }
-            }
-        }
-        out
-    }
-
-    /// The nodes of every cloth face within the thickness of a pinch point, each with that
-    /// pinch's velocity (the first pinch found for it).
-    fn faces_at_pinches(&self, pinches: &[Pinch]) -> Vec<(usize, Vec3)> {
-        let Some(world) = &self.ws.collisions else { return Vec::new() };
-        if pinches.is_empty() {
-            return Vec::new();
-        }
-        let th = world.params.thickness;
-        let all = Aabb::from_points(pinches.iter().map(|p| &p.x)).inflate(th);
-        let x = self.state.mesh.positions();
-        let mut out: Vec<(usize, Vec3)> = Vec::new();
-        for f in 0..self.state.mesh.faces.len() {
-            let tri = self.state.mesh.face_nodes(f);
-            let [a, b, c] = tri.map(|i| &x[i]);
-            let bx = Aabb::from_points([a, b, c]);
-            if !bx.overlaps(&all) {
-                continue;
-            }
-            let bx = bx.inflate(th);
-            let hit = pinches
-                .iter()
-                .find(|p| bx.distance_squared(&p.x) == 0.0 && closest_point_triangle(&p.x, a, b, c).dist < th);
-            if let Some(p) = hit {
-                out.extend(tri.map(|i| (i, p.v)));
-            }
         }
         out
     }

@@ -52,6 +52,10 @@ pub struct SimState {
     /// Participants of the friction contacts that stuck at the last step, sorted: the next
     /// step's first guess of their mode (`collision::friction`).
     pub stuck: Vec<[usize; 4]>,
+    /// Cloth nodes the separation stage held in a pinch at the last step, sorted: queried again
+    /// at the next step wherever they are (inside both obstacles once the pinch has closed past
+    /// them; `sim::separate`).
+    pub pinched: Vec<usize>,
     /// Per node, the largest view factor of its faces at the last view-dependent remesh
     /// (`sizing::view_memory`, smoothed coarsening); empty before it and in other modes.
     pub view_memory: Vec<Real>,
@@ -107,6 +111,7 @@ impl SimState {
             plastic,
             mesh,
             stuck: Vec::new(),
+            pinched: Vec::new(),
             view_memory: Vec::new(),
             buckle: Vec::new(),
         }
@@ -164,6 +169,9 @@ impl SimState {
         // Only looked up (a first guess), but looked up by binary search.
         if !self.stuck.is_sorted() {
             return Err(bad("friction contacts not sorted".into()));
+        }
+        if !self.pinched.is_sorted() || self.pinched.last().is_some_and(|&i| i >= n) {
+            return Err(bad("pinched nodes not sorted or out of range".into()));
         }
         if !self.view_memory.is_empty() && self.view_memory.len() != n {
             return Err(bad(format!("view memory of {} nodes for {n}", self.view_memory.len())));

@@ -17,6 +17,7 @@ use crate::solver::pattern::BlockPattern;
 use crate::solver::ImplicitSystem;
 
 use super::constrain::Constraints;
+use super::pinch::BandCache;
 use super::pop::PopStats;
 use super::recover::FaultStats;
 use super::state::SimState;
@@ -50,6 +51,8 @@ pub struct Workspace {
     /// with the pinch's velocity, which holds them (`separate.rs`); empty unless the separation
     /// stage runs.
     pub trapped: Vec<(usize, Vec3)>,
+    /// The obstacle faces that may pinch cloth this frame (`pinch::BandCache`).
+    pub(super) pinch_faces: Option<BandCache>,
     /// The last view factors computed (`adapt::face_views`) and the fingerprint of the state
     /// they were computed for: the frame end's stats and the next frame's remesh see the same
     /// state, so the second reuses the first.
@@ -81,6 +84,7 @@ impl Workspace {
             faults: FaultStats::default(),
             constraints: Constraints::build(scene, state),
             trapped: Vec::new(),
+            pinch_faces: None,
             views: None,
         })
     }

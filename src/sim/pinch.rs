@@ -1,0 +1,377 @@
+//! Where two obstacles pinch cloth (the separation stage's "Pinches during the run",
+//! `separate.rs`): the *bands* where two present obstacles' surfaces face each other within
+//! twice the thickness near the cloth, the cloth nodes within the thickness of both sides of a
+//! band, and the *pinch points* where the two surfaces close on each other.
+//!
+//! Everything here is local geometry on the few faces of each band, taken at the step's start
+//! from the positions the collision stages already hold: no signed distance field is built or
+//! brought to the step for it. ARCSim's dancer is 16 rigid parts that overlap at every joint;
+//! querying their fields (each rebuilt for every step the body moves) for the dress's nodes cost
+//! a fifth of `dress_dance`'s frame time while finding no pinch at all.
+
+use std::borrow::Cow;
+
+use rayon::prelude::*;
+
+use crate::collision::bvh::{Aabb, Bvh};
+use crate::collision::geometry::closest_point_triangle;
+use crate::collision::sdf::SdfHit;
+use crate::collision::world::CollisionWorld;
+use crate::math::{Real, Vec3};
+
+/// Two obstacle surfaces pinch a node when it lies within the thickness of both and their
+/// outward normals there are more than 120° apart (cos < −½): they face each other across it. A
+/// floor meeting a wall (90°) leaves a corner the cloth can rest in; it is not a pinch.
+pub const PINCH_COS: Real = -0.5;
+
+/// A pinch point's two surfaces close on each other by at least this fraction of the thickness
+/// per step (a guard against round-off between bodies that move together).
+pub const CLOSING: Real = 1e-3;
+
+/// A band keeps the faces of one obstacle near a face of the other whose normal points against
+/// theirs at all (dot product below 0): looser than `PINCH_COS`, as the closest point's normal
+/// may be an edge's or a vertex's. Where the parts of a body overlap at a joint their surfaces
+/// cross at a shallow angle, normals alike, and no band forms there.
+const BAND_FACING: Real = -0.5;
+
+/// Barycentric weights of the samples a face gives `pinch_points`: centroid, vertices, edge
+/// midpoints.
+const FACE_SAMPLES: [[Real; 3]; 7] = [
+    [1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0],
+    [1.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0],
+    [0.0, 0.0, 1.0],
+    [0.5, 0.5, 0.0],
+    [0.0, 0.5, 0.5],
+    [0.5, 0.0, 0.5],
+];
+
+/// A point where two obstacles pinch, with the velocity of the pinch there (the mean of both
+/// surfaces').
+pub(super) struct Pinch {
+    pub x: Vec3,
+    pub v: Vec3,
+}
+
+/// Some faces of one obstacle at the step's start, queried for the closest point.
+struct Patch<'a> {
+    body: usize,
+    x: &'a [Vec3],
+    tris: &'a [[usize; 3]],
+    faces: Vec<usize>,
+    /// Per patch face: its unit normal and its box grown by twice the thickness.
+    normals: Vec<Vec3>,
+    boxes: Vec<Aabb>,
+    tree: Bvh,
+}
+
+impl<'a> Patch<'a> {
+    fn new(body: usize, x: &'a [Vec3], tris: &'a [[usize; 3]], faces: Vec<usize>, grow: Real) -> Self {
+        let corners = |f: usize| tris[f].map(|i| x[i]);
+        let normals = faces
+            .iter()
+            .map(|&f| {
+                let [a, b, c] = corners(f);
+                (b - a).cross(&(c - a)).try_normalize(0.0).unwrap_or_else(Vec3::zeros)
+            })
+            .collect();
+        let boxes: Vec<Aabb> = faces.iter().map(|&f| Aabb::from_points(&corners(f)).inflate(grow)).collect();
+        Patch { body, x, tris, normals, tree: Bvh::build(&boxes), boxes, faces }
+    }
+
+    /// The closest point to `p` on the patch's faces whose grown boxes hold `p` (ties: the first
+    /// in the tree's order), signed by the face's normal as `MeshSdf::query` signs it.
+    fn closest(&self, p: &Vec3) -> Option<SdfHit> {
+        let mut best: Option<SdfHit> = None;
+        self.tree.query(&Aabb { min: *p, max: *p }, &self.boxes, |k| {
+            let f = self.faces[k];
+            let [a, b, c] = self.tris[f].map(|i| &self.x[i]);
+            let cp = closest_point_triangle(p, a, b, c);
+            if best.as_ref().is_some_and(|h| h.distance.abs() <= cp.dist) {
+                return;
+            }
+            let sign = if (p - cp.point).dot(&self.normals[k]) < 0.0 { -1.0 } else { 1.0 };
+            let normal = if cp.dist > 0.0 { (p - cp.point) * (sign / cp.dist) } else { self.normals[k] };
+            best = Some(SdfHit { distance: sign * cp.dist, point: cp.point, normal, triangle: f, bary: cp.bary });
+        });
+        best
+    }
+}
+
+/// Two obstacles' faces that face each other within twice the thickness, near the cloth.
+pub(super) struct Band<'a> {
+    sides: [Patch<'a>; 2],
+}
+
+/// Each present obstacle's vertex positions at `t` (the collision stages' own when it takes
+/// part in the current step).
+pub(super) fn body_positions(world: &CollisionWorld, t: Real) -> Vec<Option<Cow<'_, [Vec3]>>> {
+    (0..world.bodies.len())
+        .map(|b| match world.present(b, t) {
+            false => None,
+            true => Some(match world.body_positions(b) {
+                Some(x) => Cow::Borrowed(x),
+                None => Cow::Owned(world.bodies[b].positions_at(t)),
+            }),
+        })
+        .collect()
+}
+
+/// The faces that can form bands over one frame: for each pair of present obstacles, the faces
+/// of each within twice the thickness of a face of the other that faces it (normals' dot
+/// product below `FRAME_FACING`), with margins for how far both move over the frame. Found
+/// once per frame (the parts of ARCSim's dancer have 25,000 faces, 16,000 of them in the boxes of
+/// other parts); each step keeps those near the cloth (`bands`).
+pub(super) struct BandCache {
+    frame: usize,
+    present: Vec<bool>,
+    pairs: Vec<(usize, usize, Vec<usize>, Vec<usize>)>,
+}
+
+/// Face pairs that face each other at the frame's start by this much (dot product) are kept for
+/// the frame: looser than `BAND_FACING`, as the parts turn during it.
+const FRAME_FACING: Real = -0.3;
+
+impl BandCache {
+    /// Whether the cache was built for `frame` with these bodies present.
+    pub(super) fn holds(&self, frame: usize, present: &[bool]) -> bool {
+        self.frame == frame && self.present == present
+    }
+
+    /// The cache for the frame `frame` starting (or resumed) at `t`, `frame_time` long.
+    pub(super) fn new(
+        world: &CollisionWorld,
+        positions: &[Option<Cow<'_, [Vec3]>>],
+        t: Real,
+        frame_time: Real,
+        frame: usize,
+    ) -> Self {
+        let th = world.params.thickness;
+        let present: Vec<bool> = positions.iter().map(Option::is_some).collect();
+        // How far each body's vertices move over the frame (at its middle and end; ×1.25 for the
+        // arcs in between).
+        let travel: Vec<Real> = (0..world.bodies.len())
+            .map(|k| {
+                let (Some(x), false) = (positions[k].as_deref(), world.bodies[k].is_static()) else { return 0.0 };
+                let moved = |s: Real| {
+                    let y = world.bodies[k].positions_at(t + s * frame_time);
+                    x.iter().zip(&y).map(|(p, q)| (q - p).norm()).fold(0.0, Real::max)
+                };
+                1.25 * moved(0.5).max(moved(1.0))
+            })
+            .collect();
+        let boxes: Vec<_> =
+            (0..world.bodies.len()).map(|b| world.body_box(b, t).map(|bx| bx.inflate(th + travel[b]))).collect();
+        let mut pairs = Vec::new();
+        for (a, b) in (0..boxes.len()).flat_map(|a| (a + 1..boxes.len()).map(move |b| (a, b))) {
+            let (Some(box_a), Some(box_b), Some(xa), Some(xb)) =
+                (boxes[a], boxes[b], positions[a].as_deref(), positions[b].as_deref())
+            else {
+                continue;
+            };
+            if !box_a.overlaps(&box_b) {
+                continue;
+            }
+            let reach = 2.0 * th + travel[a] + travel[b];
+            let (ta, tb) = (world.bodies[a].triangles(), world.bodies[b].triangles());
+            let (ra, rb) = (box_b.inflate(reach), box_a.inflate(reach));
+            let side_a = faces_where(ta, xa, 0..ta.len(), |bx| bx.overlaps(&ra));
+            let side_b = faces_where(tb, xb, 0..tb.len(), |bx| bx.overlaps(&rb));
+            let Some((side_a, side_b)) = facing_pairs(&side_a, &side_b, reach, FRAME_FACING) else { continue };
+            pairs.push((a, b, side_a, side_b));
+        }
+        BandCache { frame, present, pairs }
+    }
+}
+
+/// The bands at `t` (`Band`): of the frame's face pairs (`BandCache`), each side's faces that
+/// face a face of the other within twice the thickness (`BAND_FACING`), within three
+/// thicknesses of a cloth face (`cloth` holds the cloth faces' corners).
+pub(super) fn bands<'a>(
+    world: &'a CollisionWorld,
+    positions: &'a [Option<Cow<'a, [Vec3]>>],
+    cache: &BandCache,
+    cloth: &[[Vec3; 3]],
+) -> Vec<Band<'a>> {
+    let th = world.params.thickness;
+    let reach = 2.0 * th;
+    if cache.pairs.is_empty() || cloth.is_empty() {
+        return Vec::new();
+    }
+    let cloth_boxes: Vec<Aabb> = cloth.iter().map(|c| Aabb::from_points(c)).collect();
+    let cloth_tree = Bvh::build(&cloth_boxes);
+    let near_cloth = |bx: &Aabb| {
+        let mut hit = false;
+        cloth_tree.query(&bx.inflate(reach + th), &cloth_boxes, |_| hit = true);
+        hit
+    };
+    let mut out = Vec::new();
+    for (a, b, fa, fb) in &cache.pairs {
+        let (Some(xa), Some(xb)) = (positions[*a].as_deref(), positions[*b].as_deref()) else { continue };
+        // Each side's faces near the cloth, with boxes and normals at t.
+        let side_a = faces_where(world.bodies[*a].triangles(), xa, fa.iter().copied(), near_cloth);
+        let side_b = faces_where(world.bodies[*b].triangles(), xb, fb.iter().copied(), near_cloth);
+        let Some((side_a, side_b)) = facing_pairs(&side_a, &side_b, reach, BAND_FACING) else { continue };
+        let patch = |k: usize, x: &'a [Vec3], faces| Patch::new(k, x, world.bodies[k].triangles(), faces, reach);
+        out.push(Band { sides: [patch(*a, xa, side_a), patch(*b, xb, side_b)] });
+    }
+    out
+}
+
+/// Some faces of a body at positions `x`: those `keep` accepts by their box, with their boxes
+/// and unit normals.
+type Faces = (Vec<usize>, Vec<Aabb>, Vec<Vec3>);
+
+fn faces_where(
+    tris: &[[usize; 3]],
+    x: &[Vec3],
+    faces: impl Iterator<Item = usize>,
+    keep: impl Fn(&Aabb) -> bool,
+) -> Faces {
+    let mut out = (Vec::new(), Vec::new(), Vec::new());
+    for f in faces {
+        let c = tris[f].map(|i| x[i]);
+        let bx = Aabb::from_points(&c);
+        if keep(&bx) {
+            out.0.push(f);
+            out.1.push(bx);
+            out.2.push((c[1] - c[0]).cross(&(c[2] - c[0])).try_normalize(0.0).unwrap_or_else(Vec3::zeros));
+        }
+    }
+    out
+}
+
+/// Of two bodies' faces, those of each within `reach` (box-wise) of a face of the other whose
+/// normal faces theirs (dot product below `facing`); `None` when there are none.
+fn facing_pairs(
+    (fa, ba, na): &Faces,
+    (fb, bb, nb): &Faces,
+    reach: Real,
+    facing: Real,
+) -> Option<(Vec<usize>, Vec<usize>)> {
+    if fa.is_empty() || fb.is_empty() {
+        return None;
+    }
+    let tree_b = Bvh::build(bb);
+    let (mut side_a, mut side_b) = (Vec::new(), Vec::new());
+    for k in 0..fa.len() {
+        let mut found = false;
+        tree_b.query(&ba[k].inflate(reach), bb, |j| {
+            if na[k].dot(&nb[j]) < facing {
+                found = true;
+                side_b.push(fb[j]);
+            }
+        });
+        if found {
+            side_a.push(fa[k]);
+        }
+    }
+    side_b.sort_unstable();
+    side_b.dedup();
+    (!side_a.is_empty()).then_some((side_a, side_b))
+}
+
+/// Per cloth node, (body, hit) for each side of a band it lies within the thickness of (or
+/// inside of, near the surface), one per body: what the node rule of `separate.rs` judges.
+pub(super) fn node_hits(bands: &[Band], x: &[Vec3], th: Real) -> Vec<Vec<(usize, SdfHit)>> {
+    let mut out: Vec<Vec<(usize, SdfHit)>> = vec![Vec::new(); x.len()];
+    for band in bands {
+        let found: Vec<[Option<SdfHit>; 2]> =
+            x.par_iter().map(|p| band.sides.each_ref().map(|s| s.closest(p).filter(|q| q.distance < th))).collect();
+        for (i, pair) in found.into_iter().enumerate() {
+            for (side, q) in band.sides.iter().zip(pair) {
+                let Some(q) = q else { continue };
+                match out[i].iter_mut().find(|(b, _)| *b == side.body) {
+                    Some((_, old)) if old.distance.abs() <= q.distance.abs() => {}
+                    Some((_, old)) => *old = q,
+                    None => out[i].push((side.body, q)),
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The points where the two sides of a band pinch (`Pinch`): samples of either side's faces
+/// within twice the thickness of the other side, facing it (`PINCH_COS`) and closing on it
+/// (`CLOSING`) over a step of length `h`, with their velocities.
+pub(super) fn pinch_points(world: &CollisionWorld, bands: &[Band], t: Real, h: Real) -> Vec<Pinch> {
+    let reach = 2.0 * world.params.thickness;
+    let mut moved: Vec<Option<Vec<Vec3>>> = vec![None; world.bodies.len()];
+    let mut out = Vec::new();
+    for band in bands {
+        for k in band.sides.iter().map(|s| s.body) {
+            let body = &world.bodies[k];
+            if !body.is_static() && moved[k].is_none() {
+                moved[k] = Some(body.positions_at(t + h));
+            }
+        }
+        // The two sides cannot close by CLOSING·τ in the step if the fastest of their vertices
+        // move less than that between them (a body paused in its pose, parts at rest).
+        let travel = |side: &Patch| match &moved[side.body] {
+            None => 0.0,
+            Some(x1) => {
+                side.faces.iter().flat_map(|&f| side.tris[f]).map(|i| (x1[i] - side.x[i]).norm()).fold(0.0, Real::max)
+            }
+        };
+        if travel(&band.sides[0]) + travel(&band.sides[1]) < CLOSING * world.params.thickness {
+            continue;
+        }
+        for (from, to) in [(&band.sides[0], &band.sides[1]), (&band.sides[1], &band.sides[0])] {
+            let samples: Vec<(usize, [Real; 3], Vec3, Vec3)> = from
+                .faces
+                .iter()
+                .zip(&from.normals)
+                .flat_map(|(&f, &n)| {
+                    let tri = from.tris[f];
+                    FACE_SAMPLES.iter().map(move |w| (f, *w, (0..3).map(|k| from.x[tri[k]] * w[k]).sum(), n))
+                })
+                .collect();
+            let found: Vec<Option<SdfHit>> = samples
+                .par_iter()
+                .map(|(_, _, p, n)| to.closest(p).filter(|q| q.distance.abs() < reach && q.normal.dot(n) < PINCH_COS))
+                .collect();
+            if found.iter().all(Option::is_none) {
+                continue;
+            }
+            let at = |k: usize, tri: [usize; 3], w: &[Real; 3], p: &Vec3| match &moved[k] {
+                Some(x1) => ((0..3).map(|j| x1[tri[j]] * w[j]).sum::<Vec3>() - p) / h,
+                None => Vec3::zeros(),
+            };
+            for ((f, w, p, _), q) in samples.iter().zip(found) {
+                let Some(q) = q else { continue };
+                let v_a = at(from.body, from.tris[*f], w, p);
+                let v_b = at(to.body, to.tris[q.triangle], &q.bary, &q.point);
+                // The gap's rate of change is (v_a − v_b)·n_b: only a closing pinch squeezes.
+                if (v_a - v_b).dot(&q.normal) * h < -CLOSING * world.params.thickness {
+                    out.push(Pinch { x: *p, v: 0.5 * (v_a + v_b) });
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The nodes of every cloth face (`cloth`: the faces' nodes and corners) within `th` of a pinch
+/// point, each with that pinch's velocity (the first pinch found for it).
+pub(super) fn faces_at_pinches(pinches: &[Pinch], cloth: &[([usize; 3], [Vec3; 3])], th: Real) -> Vec<(usize, Vec3)> {
+    if pinches.is_empty() {
+        return Vec::new();
+    }
+    let all = Aabb::from_points(pinches.iter().map(|p| &p.x)).inflate(th);
+    let mut out = Vec::new();
+    for (nodes, [a, b, c]) in cloth {
+        let bx = Aabb::from_points([a, b, c]);
+        if !bx.overlaps(&all) {
+            continue;
+        }
+        let bx = bx.inflate(th);
+        let hit = pinches
+            .iter()
+            .find(|p| bx.distance_squared(&p.x) == 0.0 && closest_point_triangle(&p.x, a, b, c).dist < th);
+        if let Some(p) = hit {
+            out.extend(nodes.map(|i| (i, p.v)));
+        }
+    }
+    out
+}
