@@ -80,7 +80,10 @@ impl<'a> Patch<'a> {
     }
 
     /// The closest point to `p` on the patch's faces whose grown boxes hold `p` (ties: the first
-    /// in the tree's order), signed by the face's normal as `MeshSdf::query` signs it.
+    /// in the tree's order), signed by the face's normal where `p` lies over the face's interior.
+    /// A patch is part of a surface: a point nearest an edge or a corner of it may lie outside
+    /// the body across a face the patch leaves out (beside a plate standing on a floor, level
+    /// with its bottom face), so there the distance counts as outside.
     fn closest(&self, p: &Vec3) -> Option<SdfHit> {
         let mut best: Option<SdfHit> = None;
         self.tree.query(&Aabb { min: *p, max: *p }, &self.boxes, |k| {
@@ -90,7 +93,7 @@ impl<'a> Patch<'a> {
             if best.as_ref().is_some_and(|h| h.distance.abs() <= cp.dist) {
                 return;
             }
-            let sign = if (p - cp.point).dot(&self.normals[k]) < 0.0 { -1.0 } else { 1.0 };
+            let sign = if cp.interior && (p - cp.point).dot(&self.normals[k]) < 0.0 { -1.0 } else { 1.0 };
             let normal = if cp.dist > 0.0 { (p - cp.point) * (sign / cp.dist) } else { self.normals[k] };
             best = Some(SdfHit { distance: sign * cp.dist, point: cp.point, normal, triangle: f, bary: cp.bary });
         });
