@@ -189,19 +189,19 @@ impl BandCache {
 
 /// The bands at `t` (`Band`): of the frame's face pairs (`BandCache`), each side's faces that
 /// face a face of the other within twice the thickness (`BAND_FACING`), within three
-/// thicknesses of a cloth face (`cloth` holds the cloth faces' corners).
+/// thicknesses of a cloth face (`cloth`: the cloth faces' nodes and corners).
 pub(super) fn bands<'a>(
     world: &'a CollisionWorld,
     positions: &'a [Option<Cow<'a, [Vec3]>>],
     cache: &BandCache,
-    cloth: &[[Vec3; 3]],
+    cloth: &[([usize; 3], [Vec3; 3])],
 ) -> Vec<Band<'a>> {
     let th = world.params.thickness;
     let reach = 2.0 * th;
     if cache.pairs.is_empty() || cloth.is_empty() {
         return Vec::new();
     }
-    let cloth_boxes: Vec<Aabb> = cloth.iter().map(|c| Aabb::from_points(c)).collect();
+    let cloth_boxes: Vec<Aabb> = cloth.iter().map(|(_, c)| Aabb::from_points(c)).collect();
     let cloth_tree = Bvh::build(&cloth_boxes);
     let near_cloth = |bx: &Aabb| {
         let mut hit = false;

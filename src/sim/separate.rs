@@ -142,7 +142,6 @@ impl Simulation {
             .map(|f| self.state.mesh.face_nodes(f))
             .map(|n| (n, n.map(|i| x[i])))
             .collect();
-        let corners: Vec<[Vec3; 3]> = cloth.iter().map(|(_, c)| *c).collect();
         let positions = pinch::body_positions(world, t);
         let present_now: Vec<bool> = positions.iter().map(Option::is_some).collect();
         let frame = self.state.frame;
@@ -150,7 +149,7 @@ impl Simulation {
             self.ws.pinch_faces = Some(BandCache::new(world, &positions, t, self.scene.frame_time, frame));
         }
         let cache = self.ws.pinch_faces.as_ref().expect("built above");
-        let bands = pinch::bands(world, &positions, cache, &corners);
+        let bands = pinch::bands(world, &positions, cache, &cloth);
         // Nodes near both sides of a band, from the band's faces; while separating, every node
         // within an obstacle's box (anywhere for an open one: its inside is a half-space) from
         // its distance field, as is a node held at the last step, wherever it is (the pinch may
