@@ -295,23 +295,55 @@ pub(super) fn node_hits(bands: &[Band], x: &[Vec3], th: Real) -> Vec<Vec<(usize,
     out
 }
 
+/// The present obstacles' vertex positions at the step's end, each moving body's computed once,
+/// when first asked.
+pub(super) struct StepEnd {
+    t1: Real,
+    x: Vec<Option<Vec<Vec3>>>,
+}
+
+impl StepEnd {
+    pub(super) fn new(world: &CollisionWorld, t1: Real) -> Self {
+        StepEnd { t1, x: vec![None; world.bodies.len()] }
+    }
+
+    /// Body `k`'s positions at the step's end; `None` for a body that never moves.
+    fn positions(&mut self, world: &CollisionWorld, k: usize) -> Option<&[Vec3]> {
+        let body = &world.bodies[k];
+        if body.is_static() {
+            return None;
+        }
+        Some(self.x[k].get_or_insert_with(|| body.positions_at(self.t1)))
+    }
+
+    /// The velocity over a step of length `h` of the point of body `k`'s triangle `tri` with
+    /// barycentric weights `w`, at `p` now (zero on a body that never moves).
+    pub(super) fn velocity(
+        &mut self,
+        world: &CollisionWorld,
+        k: usize,
+        tri: [usize; 3],
+        w: &[Real; 3],
+        p: &Vec3,
+        h: Real,
+    ) -> Vec3 {
+        match self.positions(world, k) {
+            Some(x1) => ((0..3).map(|j| x1[tri[j]] * w[j]).sum::<Vec3>() - p) / h,
+            None => Vec3::zeros(),
+        }
+    }
+}
+
 /// The points where the two sides of a band pinch (`Pinch`): samples of either side's faces
 /// within twice the thickness of the other side, facing it (`PINCH_COS`) and closing on it
 /// (`CLOSING`) over a step of length `h`, with their velocities.
-pub(super) fn pinch_points(world: &CollisionWorld, bands: &[Band], t: Real, h: Real) -> Vec<Pinch> {
+pub(super) fn pinch_points(world: &CollisionWorld, bands: &[Band], end: &mut StepEnd, h: Real) -> Vec<Pinch> {
     let reach = 2.0 * world.params.thickness;
-    let mut moved: Vec<Option<Vec<Vec3>>> = vec![None; world.bodies.len()];
     let mut out = Vec::new();
     for band in bands {
-        for k in band.sides.iter().map(|s| s.body) {
-            let body = &world.bodies[k];
-            if !body.is_static() && moved[k].is_none() {
-                moved[k] = Some(body.positions_at(t + h));
-            }
-        }
         // The two sides cannot close by CLOSING·τ in the step if the fastest of their vertices
         // move less than that between them (a body paused in its pose, parts at rest).
-        let travel = |side: &Patch| match &moved[side.body] {
+        let mut travel = |side: &Patch| match end.positions(world, side.body) {
             None => 0.0,
             Some(x1) => {
                 side.faces.iter().flat_map(|&f| side.tris[f]).map(|i| (x1[i] - side.x[i]).norm()).fold(0.0, Real::max)
@@ -337,14 +369,10 @@ pub(super) fn pinch_points(world: &CollisionWorld, bands: &[Band], t: Real, h: R
             if found.iter().all(Option::is_none) {
                 continue;
             }
-            let at = |k: usize, tri: [usize; 3], w: &[Real; 3], p: &Vec3| match &moved[k] {
-                Some(x1) => ((0..3).map(|j| x1[tri[j]] * w[j]).sum::<Vec3>() - p) / h,
-                None => Vec3::zeros(),
-            };
             for ((f, w, p, _), q) in samples.iter().zip(found) {
                 let Some(q) = q else { continue };
-                let v_a = at(from.body, from.tris[*f], w, p);
-                let v_b = at(to.body, to.tris[q.triangle], &q.bary, &q.point);
+                let v_a = end.velocity(world, from.body, from.tris[*f], w, p, h);
+                let v_b = end.velocity(world, to.body, to.tris[q.triangle], &q.bary, &q.point, h);
                 // The gap's rate of change is (v_a − v_b)·n_b: only a closing pinch squeezes.
                 if (v_a - v_b).dot(&q.normal) * h < -CLOSING * world.params.thickness {
                     out.push(Pinch { x: *p, v: 0.5 * (v_a + v_b) });

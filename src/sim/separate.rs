@@ -75,9 +75,10 @@
 use rayon::prelude::*;
 
 use crate::collision::sdf::SdfHit;
+use crate::collision::world::CollisionWorld;
 use crate::math::{Real, Vec3};
 
-use super::pinch::{self, BandCache, PINCH_COS};
+use super::pinch::{self, BandCache, StepEnd, PINCH_COS};
 use super::Simulation;
 
 /// Largest separation move of a node in one step, in repulsion thicknesses: less than the
@@ -192,10 +193,11 @@ impl Simulation {
             }
         }
         let mut trapped: Vec<bool> = hits.iter().map(NodeHits::trapped).collect();
-        let mut velocity = self.pinch_velocities(&hits, &trapped, h);
+        let mut end = StepEnd::new(world, t + h);
+        let mut velocity = pinch_velocities(world, &hits, &trapped, &mut end, h);
         // A cloth face the obstacles pinch between its nodes (a face larger than the pinch) is
         // held whole: the nodes alone do not see it.
-        let pinches = pinch::pinch_points(world, &bands, t, h);
+        let pinches = pinch::pinch_points(world, &bands, &mut end, h);
         for (i, v) in pinch::faces_at_pinches(&pinches, &cloth, th) {
             if !trapped[i] {
                 trapped[i] = true;
@@ -216,31 +218,6 @@ impl Simulation {
         }
         self.state.separating = separating && hits.iter().any(|n| n.inside() > 0);
         moved
-    }
-
-    /// Each trapped node with the velocity of the pinch over the step of length `h`: the mean of
-    /// the velocities of the surfaces it is near, at the closest points (zero between obstacles
-    /// that stand still).
-    fn pinch_velocities(&self, hits: &[NodeHits], trapped: &[bool], h: Real) -> Vec<Vec3> {
-        let mut out = vec![Vec3::zeros(); hits.len()];
-        let Some(world) = &self.ws.collisions else { return out };
-        let t1 = self.state.time + h;
-        let mut moved: Vec<Option<Vec<Vec3>>> = vec![None; world.bodies.len()];
-        for (i, n) in hits.iter().enumerate().filter(|&(i, _)| trapped[i]) {
-            let mut v = Vec3::zeros();
-            for (b, q) in &n.near {
-                let body = &world.bodies[*b];
-                if body.is_static() {
-                    continue;
-                }
-                let x1 = moved[*b].get_or_insert_with(|| body.positions_at(t1));
-                let tri = body.triangles()[q.triangle];
-                let p1: Vec3 = tri.iter().zip(&q.bary).map(|(&k, &w)| x1[k] * w).sum();
-                v += (p1 - q.point) / h;
-            }
-            out[i] = v / n.near.len() as Real;
-        }
-        out
     }
 
     /// Moves every free node inside exactly one obstacle a bounded step out of it (the module
@@ -275,4 +252,26 @@ impl Simulation {
         }
         moved
     }
+}
+
+/// Each trapped node with the velocity of the pinch over the step of length `h`: the mean of the
+/// velocities of the surfaces it is near, at the closest points (zero between obstacles that
+/// stand still).
+fn pinch_velocities(
+    world: &CollisionWorld,
+    hits: &[NodeHits],
+    trapped: &[bool],
+    end: &mut StepEnd,
+    h: Real,
+) -> Vec<Vec3> {
+    let mut out = vec![Vec3::zeros(); hits.len()];
+    for (i, n) in hits.iter().enumerate().filter(|&(i, _)| trapped[i]) {
+        let v: Vec3 = n
+            .near
+            .iter()
+            .map(|(b, q)| end.velocity(world, *b, world.bodies[*b].triangles()[q.triangle], &q.bary, &q.point, h))
+            .sum();
+        out[i] = v / n.near.len() as Real;
+    }
+    out
 }
