@@ -11,6 +11,8 @@ use std::sync::Mutex;
 
 mod resolve;
 
+pub use resolve::InvMasses;
+
 use super::areas::ElementAreas;
 use super::broad::{BroadPhase, Candidate, Interval, VF};
 use super::bvh::Aabb;
@@ -47,6 +49,9 @@ pub struct CollisionCounters {
     /// Zones that became rigid, or rigid zones that took in more nodes, at the smallest step
     /// (`CollisionWorld::resolve`).
     pub rigid_zones: usize,
+    /// Nodes trapped in a pinch that yielded to a zone with no solution while they were held
+    /// (`CollisionWorld::resolve`).
+    pub yielded_nodes: usize,
     /// Friction contacts sticking and sliding at the accepted solves.
     pub sticking: usize,
     pub sliding: usize,

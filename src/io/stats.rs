@@ -142,6 +142,10 @@ pub struct CollisionFrameStats {
     /// counts again).
     #[serde(default)]
     pub rigid_zones: usize,
+    /// Nodes trapped in a pinch that an impact zone with no solution while they were held
+    /// moved like free cloth (a node counts once per zone that moved it).
+    #[serde(default)]
+    pub yielded_nodes: usize,
     /// Cloth nodes deeper than thickness/2 inside an obstacle at the frame end (must be 0).
     pub penetrations: usize,
     /// Friction contacts sticking and sliding at the accepted solves (summed over the steps).

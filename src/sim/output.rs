@@ -237,6 +237,7 @@ fn frame_stats(sim: &mut Simulation, number: usize, adaptive: bool) -> FrameStat
             spread_pushes: c.spread_pushes,
             failed_zones: c.failed_zones,
             rigid_zones: c.rigid_zones,
+            yielded_nodes: c.yielded_nodes,
             penetrations: sim.penetrations(),
             sticking: c.sticking,
             sliding: c.sliding,

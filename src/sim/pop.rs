@@ -33,6 +33,7 @@
 use std::time::Instant;
 
 use crate::collision::proximity::{contacts_energy, Contact};
+use crate::collision::world::InvMasses;
 use crate::forces::wind::wind_face;
 use crate::math::{Real, Vec3};
 use crate::solver::{SolveTiming, StepInput};
@@ -267,7 +268,14 @@ impl Simulation {
         let mesh = &self.state.mesh;
         let inv_mass = inverse_masses(&mesh.nodes, pinned);
         let mut x = mesh.positions();
-        world.resolve(mesh, x0, &mut x, &inv_mass, None, &mut self.ws.counters);
+        world.resolve(
+            mesh,
+            x0,
+            &mut x,
+            InvMasses { held: &inv_mass, yielding: &inv_mass },
+            None,
+            &mut self.ws.counters,
+        );
         for (node, p) in self.state.mesh.nodes.iter_mut().zip(x) {
             node.x = p;
         }

@@ -11,6 +11,7 @@ use std::time::Instant;
 use crate::collision::friction::{self, Budget, Change, Friction, FrictionContact, FrictionFrame};
 use crate::collision::proximity::Contact;
 use crate::collision::speculative::Speculative;
+use crate::collision::world::InvMasses;
 use crate::forces::handle::Spring;
 use crate::math::{Real, Vec3};
 use crate::solver::{SolveError, SolveTiming, StepInput};
@@ -69,6 +70,9 @@ struct StepData {
     /// stages keep them where the solve put them (ARCSim's strain limiting keeps every handle
     /// constraint's value, `strainlimiting.cpp`); collisions move them like free nodes.
     held_inv_mass: Vec<Real>,
+    /// `inv_mass`, with the nodes trapped in a pinch (`separate.rs`) movable: what they take
+    /// when an impact zone has no solution while they are held (`CollisionWorld::resolve`).
+    yield_inv_mass: Vec<Real>,
     /// Elastic energy at the start (from the assembly).
     u0: Real,
     /// The work friction may do on the cloth over the step (a moving obstacle's drag).
@@ -333,6 +337,14 @@ impl Simulation {
                 held_inv_mass[*node] = 0.0;
             }
         }
+        let mut yield_inv_mass = inv_mass.clone();
+        for &(n, _) in self.ws.trapped.iter().filter(|&&(n, _)| nodes[n].mass > 0.0) {
+            yield_inv_mass[n] = 1.0 / nodes[n].mass;
+        }
+        // Handles win over the pinch, as in `pinned_velocities`.
+        for &(n, _) in &held.exact {
+            yield_inv_mass[n] = 0.0;
+        }
         let obstacle_speed = match &self.ws.collisions {
             Some(w) => w.obstacle_velocities(h).iter().map(|v| v.norm()).fold(0.0, Real::max),
             None => 0.0,
@@ -349,6 +361,7 @@ impl Simulation {
             contacts,
             inv_mass,
             held_inv_mass,
+            yield_inv_mass,
             u0,
             friction_work,
             stuck,
@@ -455,7 +468,14 @@ impl Simulation {
         let Some(world) = &mut self.ws.collisions else { return false };
         let cap_hits = self.ws.counters.cap_hits;
         let before = x.to_vec();
-        world.resolve(&self.state.mesh, &step.x0, x, &step.inv_mass, rigid_beyond, &mut self.ws.counters);
+        world.resolve(
+            &self.state.mesh,
+            &step.x0,
+            x,
+            InvMasses { held: &step.inv_mass, yielding: &step.yield_inv_mass },
+            rigid_beyond,
+            &mut self.ws.counters,
+        );
         for i in 0..x.len() {
             if x[i] != before[i] {
                 v[i] = (x[i] - step.x0[i]) / step.h;

@@ -10,6 +10,16 @@ use crate::collision::rigid_zone::resolve_zone_rigid;
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
 
+/// Inverse masses of the cloth nodes in the impact-zone projection (`CollisionWorld::resolve`).
+#[derive(Clone, Copy)]
+pub struct InvMasses<'a> {
+    /// 0 for pinned nodes and massless ones.
+    pub held: &'a [Real],
+    /// What a held node takes when its zone has no solution while it is held (the nodes trapped
+    /// in a pinch: their mass; pinned nodes: 0).
+    pub yielding: &'a [Real],
+}
+
 impl CollisionWorld {
     /// Continuous collision detection from `x0` to `x1` (cloth), obstacles from `obs_x0` to
     /// `obs_x1`. Returns impacts with their nodes, in a deterministic order.
@@ -43,7 +53,13 @@ impl CollisionWorld {
     }
 
     /// Makes the end-of-step cloth positions `x` collision-free relative to `x0` by iterated CCD
-    /// and impact-zone projection. `inv_mass` is 0 for pinned nodes.
+    /// and impact-zone projection. `masses.held` is 0 for pinned nodes.
+    ///
+    /// `masses.yielding` is each node's inverse mass when a zone cannot be solved with it held: the
+    /// nodes trapped in a pinch (`sim::separate`) are held with the pinch, but two trapped
+    /// layers closing on a free node between them leave its zone no solution but a fling. Such
+    /// a zone is solved again with its held nodes yielding, and they stay movable while the
+    /// loop runs (zones merge through them).
     ///
     /// With `rigid_beyond` (the last, smallest retry of a step), a zone whose projection has no
     /// solution, or moves one of its nodes farther than `rigid_beyond` from its start, becomes
@@ -54,7 +70,7 @@ impl CollisionWorld {
         mesh: &Mesh,
         x0: &[Vec3],
         x: &mut [Vec3],
-        inv_mass: &[Real],
+        masses: InvMasses,
         rigid_beyond: Option<Real>,
         counters: &mut CollisionCounters,
     ) {
@@ -64,14 +80,16 @@ impl CollisionWorld {
         let mut constraints: Vec<ZoneConstraint> = Vec::new();
         let mut rigid = vec![false; n];
         let mut rigid_grew = false;
+        let (mut inv_mass, yielding) = (masses.held.to_vec(), masses.yielding);
         // Handles win over collisions: an impact whose moving side is all pinned cloth (a handle
         // driven into an obstacle) has no solution, and would otherwise be met again on every
         // iteration until the cap.
-        let movable = |(nodes, imp): &([usize; 4], Impact)| {
+        let movable = |inv_mass: &[Real], (nodes, imp): &([usize; 4], Impact)| {
             (0..4).any(|j| nodes[j] < n && inv_mass[nodes[j]] > 0.0 && imp.w[j] != 0.0)
         };
         for _ in 0..self.params.max_iterations {
-            let impacts: Vec<_> = self.detect_impacts(mesh, x0, x).into_iter().filter(movable).collect();
+            let impacts: Vec<_> =
+                self.detect_impacts(mesh, x0, x).into_iter().filter(|i| movable(&inv_mass, i)).collect();
             counters.ccd_iterations += 1;
             if impacts.is_empty() {
                 return;
@@ -120,12 +138,29 @@ impl CollisionWorld {
                 if std::env::var_os("VIEWCLOTH_DEBUG_ZONES").is_some() {
                     eprintln!("zone: {} constraints, {} nodes", cons.len(), zone_nodes.len());
                 }
-                let mut state = ZoneState { x, inv_mass, fixed: &self.obs_x1 };
-                let free: Vec<usize> = zone_nodes.iter().copied().filter(|&i| inv_mass[i] > 0.0).collect();
+                let within = |x: &[Vec3], free: &[usize]| {
+                    rigid_beyond.is_none_or(|limit| free.iter().all(|&i| (x[i] - x0[i]).norm() <= limit))
+                };
+                let mut free: Vec<usize> = zone_nodes.iter().copied().filter(|&i| inv_mass[i] > 0.0).collect();
                 let already_rigid = rigid_beyond.is_some() && free.iter().any(|&i| rigid[i]);
-                let projected = !already_rigid
-                    && resolve_zone(&mut state, &cons, 1e-12).is_ok()
-                    && rigid_beyond.is_none_or(|limit| free.iter().all(|&i| (state.x[i] - x0[i]).norm() <= limit));
+                let mut state = ZoneState { x, inv_mass: &inv_mass, fixed: &self.obs_x1 };
+                let mut projected =
+                    !already_rigid && resolve_zone(&mut state, &cons, 1e-12).is_ok() && within(state.x, &free);
+                let yielders: Vec<usize> =
+                    zone_nodes.iter().copied().filter(|&i| inv_mass[i] == 0.0 && yielding[i] > 0.0).collect();
+                if !projected && !already_rigid && !yielders.is_empty() {
+                    for &i in &yielders {
+                        inv_mass[i] = yielding[i];
+                    }
+                    for &i in &zone_nodes {
+                        x[i] = target[i];
+                    }
+                    free = zone_nodes.iter().copied().filter(|&i| inv_mass[i] > 0.0).collect();
+                    state = ZoneState { x, inv_mass: &inv_mass, fixed: &self.obs_x1 };
+                    projected = resolve_zone(&mut state, &cons, 1e-12).is_ok() && within(state.x, &free);
+                    counters.yielded_nodes += yielders.len();
+                    rigid_grew = true;
+                }
                 if projected {
                     continue;
                 }
@@ -146,7 +181,7 @@ impl CollisionWorld {
                 }
             }
         }
-        if self.detect_impacts(mesh, x0, x).iter().any(movable) {
+        if self.detect_impacts(mesh, x0, x).iter().any(|i| movable(&inv_mass, i)) {
             counters.cap_hits += 1;
         }
     }
@@ -196,6 +231,71 @@ impl UnionFind {
         if ra != rb {
             let (lo, hi) = (ra.min(rb), ra.max(rb));
             self.parent[hi] = lo;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::collision::params::CollisionParams;
+    use crate::math::Vec2;
+    use crate::mesh::{Face, Node, NodeId, Vert, VertId};
+
+    /// Three separate triangles of cloth (nodes 3k..3k+3), each stacked at height `z[k]`: a
+    /// small one (the free layer between two held ones) and two larger ones over and under it.
+    fn layers(z: [Real; 3]) -> (Mesh, Vec<Vec3>) {
+        let mut mesh = Mesh::default();
+        let mut x = Vec::new();
+        for (k, z) in z.into_iter().enumerate() {
+            let corners: [[Real; 2]; 3] = match k {
+                0 => [[0.0, 0.0], [0.1, 0.0], [0.0, 0.1]],
+                _ => [[-0.05, -0.05], [0.2, -0.05], [-0.05, 0.2]],
+            };
+            for c in corners {
+                let id = mesh.nodes.len() as u32;
+                let p = Vec3::new(c[0], c[1], z);
+                mesh.nodes.push(Node { x: p, v: Vec3::zeros(), a: Vec3::zeros(), mass: 1e-3, cloth: 0 });
+                mesh.verts.push(Vert { u: Vec2::new(c[0], c[1]), node: NodeId(id) });
+                x.push(p);
+            }
+            let v = [0, 1, 2].map(|j| VertId(3 * k as u32 + j));
+            mesh.faces.push(Face { v, material: 0 });
+        }
+        mesh.rebuild_topology().unwrap();
+        (mesh, x)
+    }
+
+    /// Whether the layers keep their order: the first (free) above the third and below the
+    /// second, everywhere (they stay flat and parallel to within the gaps checked).
+    fn stacked(x: &[Vec3]) -> bool {
+        let lo = |k: usize| x[3 * k..3 * k + 3].iter().map(|p| p.z).fold(Real::MAX, Real::min);
+        let hi = |k: usize| x[3 * k..3 * k + 3].iter().map(|p| p.z).fold(Real::MIN, Real::max);
+        hi(2) < lo(0) && hi(0) < lo(1)
+    }
+
+    /// Two held layers (trapped in a pinch) close through a free layer between them: held
+    /// immovable, the free layer's zone has no solution (impacts left at the cap); yielding,
+    /// the held layers stop on it and they keep their order.
+    #[test]
+    fn held_layers_closing_on_free_cloth_yield_to_it() {
+        let (mesh, x0) = layers([0.0, 0.01, -0.01]);
+        let (_, target) = layers([0.0, -0.01, 0.01]);
+        let held: Vec<Real> = (0..9).map(|i| if i < 3 { 1e3 } else { 0.0 }).collect();
+        let yielding = vec![1e3; 9];
+        for (yields, expect_free) in [(&held, false), (&yielding, true)] {
+            let mut world = CollisionWorld::new(CollisionParams::default(), Vec::new(), 0.0);
+            assert!(!world.detect_impacts(&mesh, &x0, &target).is_empty());
+            let mut x = target.clone();
+            let mut counters = CollisionCounters::default();
+            world.resolve(&mesh, &x0, &mut x, InvMasses { held: &held, yielding: yields }, None, &mut counters);
+            let left = world.detect_impacts(&mesh, &x0, &x).len();
+            assert_eq!(stacked(&x) && left == 0, expect_free, "yielding {expect_free}: {left} impacts left");
+            if expect_free {
+                assert_eq!(counters.yielded_nodes, 6);
+                // The free layer is pushed no farther than the held layers' travel.
+                assert!(x[..3].iter().zip(&x0).all(|(p, q)| (p - q).norm() < 0.01));
+            }
         }
     }
 }
