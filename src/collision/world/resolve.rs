@@ -146,9 +146,9 @@ impl CollisionWorld {
                 let mut state = ZoneState { x, inv_mass: &inv_mass, fixed: &self.obs_x1 };
                 let mut projected =
                     !already_rigid && resolve_zone(&mut state, &cons, 1e-12).is_ok() && within(state.x, &free);
-                let yielders: Vec<usize> =
-                    zone_nodes.iter().copied().filter(|&i| inv_mass[i] == 0.0 && yielding[i] > 0.0).collect();
-                if !projected && !already_rigid && !yielders.is_empty() {
+                let yields = |i: &usize| inv_mass[*i] == 0.0 && yielding[*i] > 0.0;
+                if !projected && !already_rigid && zone_nodes.iter().any(yields) {
+                    let yielders: Vec<usize> = zone_nodes.iter().copied().filter(yields).collect();
                     for &i in &yielders {
                         inv_mass[i] = yielding[i];
                     }
