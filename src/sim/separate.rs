@@ -63,11 +63,9 @@
 //!   both, far from where their surfaces meet.
 //!
 //! Held at once are the nodes inside two obstacles, those of cloth faces at a pinch point where
-//! the two obstacles overlap, those held at the last step, and every pinched node joined to one
-//! of these by edges through pinched nodes (a patch is held whole: held apart from its middle,
-//! its rim was stretched between it and the closing surfaces, crush.json 1.00 against 0.48);
-//! the others found pinched are held only once an attempt at the step has failed without them
-//! (`hold_pinch`; the attempt is retried at the same size). A body's arm closing on its torso pinches the dress at the armpit
+//! the two obstacles overlap, and those held at the last step; the others found pinched are
+//! held only once an attempt at the step has failed without them (`hold_pinch`; the attempt is
+//! retried at the same size). A body's arm closing on its torso pinches the dress at the armpit
 //! along a gap that stays open: held there at once, the dress was carried into the overlap
 //! with the arm and crossed itself where it came out (`dress_dance` adaptive, 4 crossing pairs
 //! from frame 55 on, and cloth–obstacle pairs at frames 49–64); left to the contacts it slides
@@ -220,7 +218,7 @@ impl Simulation {
         }
         // Held at once: while separating, inside two obstacles, or held at the last step; any
         // other pinched node only once an attempt at the step fails without it (`hold_pinch`).
-        let mut now: Vec<bool> = (0..x.len())
+        let now: Vec<bool> = (0..x.len())
             .map(|i| {
                 trapped[i]
                     && (separating
@@ -229,9 +227,6 @@ impl Simulation {
                         || self.state.pinched.binary_search(&i).is_ok())
             })
             .collect();
-        // ... and the rest of a pinched patch of cloth with one such node: held apart from it,
-        // the patch's rim is stretched between it and the closing surfaces.
-        spread_along_edges(&self.state.mesh, &trapped, &mut now);
         let held = |keep: bool| -> Vec<(usize, Vec3)> {
             (0..x.len()).filter(|&i| trapped[i] && now[i] == keep).map(|i| (i, velocity[i])).collect()
         };
@@ -302,28 +297,6 @@ impl Simulation {
             moved += 1;
         }
         moved
-    }
-}
-
-/// Marks in `mark` every node of `within` joined by edges through nodes of `within` to a marked
-/// one.
-fn spread_along_edges(mesh: &crate::mesh::Mesh, within: &[bool], mark: &mut [bool]) {
-    let mut next: Vec<Vec<usize>> = vec![Vec::new(); within.len()];
-    for e in &mesh.edges {
-        let [a, b] = e.n.map(|n| n.idx());
-        if within[a] && within[b] {
-            next[a].push(b);
-            next[b].push(a);
-        }
-    }
-    let mut stack: Vec<usize> = (0..mark.len()).filter(|&i| mark[i]).collect();
-    while let Some(i) = stack.pop() {
-        for &j in &next[i] {
-            if !mark[j] {
-                mark[j] = true;
-                stack.push(j);
-            }
-        }
     }
 }
 
