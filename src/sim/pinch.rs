@@ -51,8 +51,6 @@ const FACE_SAMPLES: [[Real; 3]; 7] = [
 pub(super) struct Pinch {
     pub x: Vec3,
     pub v: Vec3,
-    /// The two obstacles overlap there (the point lies inside the other one).
-    pub overlap: bool,
 }
 
 /// Some faces of one obstacle at the step's start, queried for the closest point.
@@ -377,7 +375,7 @@ pub(super) fn pinch_points(world: &CollisionWorld, bands: &[Band], end: &mut Ste
                 let v_b = end.velocity(world, to.body, to.tris[q.triangle], &q.bary, &q.point, h);
                 // The gap's rate of change is (v_a − v_b)·n_b: only a closing pinch squeezes.
                 if (v_a - v_b).dot(&q.normal) * h < -CLOSING * world.params.thickness {
-                    out.push(Pinch { x: *p, v: 0.5 * (v_a + v_b), overlap: q.distance < 0.0 });
+                    out.push(Pinch { x: *p, v: 0.5 * (v_a + v_b) });
                 }
             }
         }
@@ -386,13 +384,8 @@ pub(super) fn pinch_points(world: &CollisionWorld, bands: &[Band], end: &mut Ste
 }
 
 /// The nodes of every cloth face (`cloth`: the faces' nodes and corners) within `th` of a pinch
-/// point, each with that pinch's velocity (the first pinch found for it) and whether any pinch
-/// within `th` of the face is where the obstacles overlap.
-pub(super) fn faces_at_pinches(
-    pinches: &[Pinch],
-    cloth: &[([usize; 3], [Vec3; 3])],
-    th: Real,
-) -> Vec<(usize, Vec3, bool)> {
+/// point, each with that pinch's velocity (the first pinch found for it).
+pub(super) fn faces_at_pinches(pinches: &[Pinch], cloth: &[([usize; 3], [Vec3; 3])], th: Real) -> Vec<(usize, Vec3)> {
     if pinches.is_empty() {
         return Vec::new();
     }
@@ -404,10 +397,11 @@ pub(super) fn faces_at_pinches(
             continue;
         }
         let bx = bx.inflate(th);
-        let near = |p: &&Pinch| bx.distance_squared(&p.x) == 0.0 && closest_point_triangle(&p.x, a, b, c).dist < th;
-        if let Some(p) = pinches.iter().find(near) {
-            let overlap = pinches.iter().filter(|p| p.overlap).any(|p| near(&p));
-            out.extend(nodes.map(|i| (i, p.v, overlap)));
+        let hit = pinches
+            .iter()
+            .find(|p| bx.distance_squared(&p.x) == 0.0 && closest_point_triangle(&p.x, a, b, c).dist < th);
+        if let Some(p) = hit {
+            out.extend(nodes.map(|i| (i, p.v)));
         }
     }
     out

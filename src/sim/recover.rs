@@ -108,7 +108,6 @@ impl Simulation {
     /// Forgets the nodes the separation stage holds or exempts from obstacle collisions.
     fn release_trapped(&mut self) {
         self.ws.trapped.clear();
-        self.ws.pinch_deferred.clear();
         if let Some(world) = &mut self.ws.collisions {
             world.exempt.clear();
         }
@@ -123,13 +122,6 @@ impl Simulation {
                 Ok(())
             }
             Err(StepFault::Fatal(e)) => Err(e),
-            Err(StepFault::Retry(fault)) if self.hold_pinch() => {
-                // Cloth pinched this step is held from now on (`separate.rs`); the same step again.
-                self.ws.counters = saved;
-                self.ws.faults.retries += 1;
-                *self.ws.faults.kinds.entry(fault.kind().to_string()).or_insert(0) += 1;
-                self.step_to(h, t1, halvings)
-            }
             Err(StepFault::Retry(fault)) if !last => {
                 self.ws.counters = saved;
                 self.ws.faults.retries += 1;

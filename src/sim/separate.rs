@@ -62,16 +62,6 @@
 //!   inside two (`SimState::pinched`): once the pinch has closed past it, it is deep inside
 //!   both, far from where their surfaces meet.
 //!
-//! Held at once are the nodes inside two obstacles, those of cloth faces at a pinch point where
-//! the two obstacles overlap, and those held at the last step; the others found pinched are
-//! held only once an attempt at the step has failed without them (`hold_pinch`; the attempt is
-//! retried at the same size). A body's arm closing on its torso pinches the dress at the armpit
-//! along a gap that stays open: held there at once, the dress was carried into the overlap
-//! with the arm and crossed itself where it came out (`dress_dance` adaptive, 4 crossing pairs
-//! from frame 55 on, and cloth–obstacle pairs at frames 49–64); left to the contacts it slides
-//! out of the pinch as it did before this rule, with no retried step. Between spheres that
-//! overlap by centimetres (crush2.json) the held faces are where they overlap.
-//!
 //! Both rules look only where two obstacles' faces face each other within twice the thickness
 //! near the cloth (`pinch.rs`: *bands*, from local geometry on those faces, found once per frame
 //! with the bodies' travel as margin and kept per step where the cloth is). So the stage runs at
@@ -208,62 +198,26 @@ impl Simulation {
         // A cloth face the obstacles pinch between its nodes (a face larger than the pinch) is
         // held whole: the nodes alone do not see it.
         let pinches = pinch::pinch_points(world, &bands, &mut end, h);
-        let mut overlap = vec![false; x.len()];
-        for (i, v, deep) in pinch::faces_at_pinches(&pinches, &cloth, th) {
-            overlap[i] |= deep;
+        for (i, v) in pinch::faces_at_pinches(&pinches, &cloth, th) {
             if !trapped[i] {
                 trapped[i] = true;
                 velocity[i] = v;
             }
         }
-        // Held at once: while separating, inside two obstacles, or held at the last step; any
-        // other pinched node only once an attempt at the step fails without it (`hold_pinch`).
-        let now: Vec<bool> = (0..x.len())
-            .map(|i| {
-                trapped[i]
-                    && (separating
-                        || overlap[i]
-                        || hits[i].inside() > 1
-                        || self.state.pinched.binary_search(&i).is_ok())
-            })
-            .collect();
-        let held = |keep: bool| -> Vec<(usize, Vec3)> {
-            (0..x.len()).filter(|&i| trapped[i] && now[i] == keep).map(|i| (i, velocity[i])).collect()
-        };
-        (self.ws.trapped, self.ws.pinch_deferred) = (held(true), held(false));
+        self.ws.trapped = (0..x.len()).filter(|&i| trapped[i]).map(|i| (i, velocity[i])).collect();
         self.state.pinched = self.ws.trapped.iter().map(|&(i, _)| i).collect();
         let moved = if separating { self.walk_out(&hits, &trapped) } else { 0 };
         let exempt: Vec<bool> = hits
             .iter()
-            .zip(&now)
+            .zip(&trapped)
             .map(|(n, &tr)| tr || (separating && n.near.iter().any(|(_, q)| -q.distance > th)))
             .collect();
-        let any_trapped = now.iter().any(|&tr| tr);
+        let any_trapped = trapped.iter().any(|&tr| tr);
         if let Some(world) = &mut self.ws.collisions {
             world.exempt = if separating || any_trapped { exempt } else { Vec::new() };
         }
         self.state.separating = separating && hits.iter().any(|n| n.inside() > 0);
         moved
-    }
-
-    /// Holds the nodes pinched at this step that were left free (`Workspace::pinch_deferred`),
-    /// after an attempt without them failed; false when there are none.
-    pub(super) fn hold_pinch(&mut self) -> bool {
-        if self.ws.pinch_deferred.is_empty() {
-            return false;
-        }
-        let n = self.state.mesh.nodes.len();
-        let Some(world) = &mut self.ws.collisions else { return false };
-        if world.exempt.is_empty() {
-            world.exempt = vec![false; n];
-        }
-        for (i, v) in std::mem::take(&mut self.ws.pinch_deferred) {
-            world.exempt[i] = true;
-            self.ws.trapped.push((i, v));
-        }
-        self.ws.trapped.sort_unstable_by_key(|&(i, _)| i);
-        self.state.pinched = self.ws.trapped.iter().map(|&(i, _)| i).collect();
-        true
     }
 
     /// Moves every free node inside exactly one obstacle a bounded step out of it (the module

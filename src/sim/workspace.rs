@@ -51,9 +51,6 @@ pub struct Workspace {
     /// with the pinch's velocity, which holds them (`separate.rs`); empty unless the separation
     /// stage runs.
     pub trapped: Vec<(usize, Vec3)>,
-    /// Nodes newly pinched at this step, held only once an attempt at the step has failed
-    /// without them (`Simulation::hold_pinch`).
-    pub(super) pinch_deferred: Vec<(usize, Vec3)>,
     /// The obstacle faces that may pinch cloth this frame (`pinch::BandCache`).
     pub(super) pinch_faces: Option<BandCache>,
     /// The last view factors computed (`adapt::face_views`) and the fingerprint of the state
@@ -87,7 +84,6 @@ impl Workspace {
             faults: FaultStats::default(),
             constraints: Constraints::build(scene, state),
             trapped: Vec::new(),
-            pinch_deferred: Vec::new(),
             pinch_faces: None,
             views: None,
         })
