@@ -72,7 +72,8 @@ struct StepData {
     held_inv_mass: Vec<Real>,
     /// `inv_mass`, with the nodes trapped in a pinch (`separate.rs`) movable: what they take
     /// when an impact zone has no solution while they are held (`CollisionWorld::resolve`).
-    yield_inv_mass: Vec<Real>,
+    /// None when nothing is trapped (then `inv_mass`).
+    yield_inv_mass: Option<Vec<Real>>,
     /// Elastic energy at the start (from the assembly).
     u0: Real,
     /// The work friction may do on the cloth over the step (a moving obstacle's drag).
@@ -337,14 +338,17 @@ impl Simulation {
                 held_inv_mass[*node] = 0.0;
             }
         }
-        let mut yield_inv_mass = inv_mass.clone();
-        for &(n, _) in self.ws.trapped.iter().filter(|&&(n, _)| nodes[n].mass > 0.0) {
-            yield_inv_mass[n] = 1.0 / nodes[n].mass;
-        }
-        // Handles win over the pinch, as in `pinned_velocities`.
-        for &(n, _) in &held.exact {
-            yield_inv_mass[n] = 0.0;
-        }
+        let yield_inv_mass = (!self.ws.trapped.is_empty()).then(|| {
+            let mut m = inv_mass.clone();
+            for &(n, _) in self.ws.trapped.iter().filter(|&&(n, _)| nodes[n].mass > 0.0) {
+                m[n] = 1.0 / nodes[n].mass;
+            }
+            // Handles win over the pinch, as in `pinned_velocities`.
+            for &(n, _) in &held.exact {
+                m[n] = 0.0;
+            }
+            m
+        });
         let obstacle_speed = match &self.ws.collisions {
             Some(w) => w.obstacle_velocities(h).iter().map(|v| v.norm()).fold(0.0, Real::max),
             None => 0.0,
@@ -472,7 +476,7 @@ impl Simulation {
             &self.state.mesh,
             &step.x0,
             x,
-            InvMasses { held: &step.inv_mass, yielding: &step.yield_inv_mass },
+            InvMasses { held: &step.inv_mass, yielding: step.yield_inv_mass.as_deref().unwrap_or(&step.inv_mass) },
             rigid_beyond,
             &mut self.ws.counters,
         );
