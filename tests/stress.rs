@@ -329,6 +329,26 @@ fn curtain_pinched_between_closing_spheres() {
 }
 
 #[test]
+fn curtain_crosses_the_closing_spheres_only_where_it_is_held() {
+    // `pinched_nodes` (stats.json) counts the cloth the pinch holds: none while the spheres are
+    // apart, some once they close on the curtain, and at every frame whose cloth crosses them.
+    let s = stresses().into_iter().find(|s| s.file == "pinch.json").unwrap();
+    let mut sim = Simulation::new(load(&s)).unwrap();
+    let mut most = 0;
+    for f in 1..=14 {
+        sim.advance_frame().unwrap();
+        let held = std::mem::take(&mut sim.ws.counters).pinched_nodes;
+        let crossing = sim.crossings().obstacle.len();
+        if f <= 4 {
+            assert_eq!(held, 0, "frame {f}: the spheres are still apart");
+        }
+        assert!(crossing == 0 || held > 0, "frame {f}: {crossing} obstacle crossings, no cloth held");
+        most = most.max(held);
+    }
+    assert!(most > 0, "the closing spheres should hold some of the curtain");
+}
+
+#[test]
 fn sheet_whipped_at_30_m_per_s() {
     // The handle does reach 30 m/s.
     let s = stresses().into_iter().find(|s| s.file == "whip.json").unwrap();

@@ -52,6 +52,8 @@ pub struct CollisionCounters {
     /// Nodes trapped in a pinch that yielded to a zone with no solution while they were held
     /// (`CollisionWorld::resolve`).
     pub yielded_nodes: usize,
+    /// The most cloth nodes held in a pinch at one step (`sim::separate`; a maximum, not a sum).
+    pub pinched_nodes: usize,
     /// Friction contacts sticking and sliding at the accepted solves.
     pub sticking: usize,
     pub sliding: usize,

@@ -146,6 +146,10 @@ pub struct CollisionFrameStats {
     /// moved like free cloth (a node counts once per zone that moved it).
     #[serde(default)]
     pub yielded_nodes: usize,
+    /// The most cloth nodes held in a pinch between two obstacles at one step of the frame (the
+    /// separation stage's hold: they cross the obstacles there, as in ARCSim).
+    #[serde(default)]
+    pub pinched_nodes: usize,
     /// Cloth nodes deeper than thickness/2 inside an obstacle at the frame end (must be 0).
     pub penetrations: usize,
     /// Friction contacts sticking and sliding at the accepted solves (summed over the steps).

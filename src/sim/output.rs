@@ -238,6 +238,7 @@ fn frame_stats(sim: &mut Simulation, number: usize, adaptive: bool) -> FrameStat
             failed_zones: c.failed_zones,
             rigid_zones: c.rigid_zones,
             yielded_nodes: c.yielded_nodes,
+            pinched_nodes: c.pinched_nodes,
             penetrations: sim.penetrations(),
             sticking: c.sticking,
             sliding: c.sliding,

@@ -206,6 +206,8 @@ impl Simulation {
         }
         self.ws.trapped = (0..x.len()).filter(|&i| trapped[i]).map(|i| (i, velocity[i])).collect();
         self.state.pinched = self.ws.trapped.iter().map(|&(i, _)| i).collect();
+        let held = &mut self.ws.counters.pinched_nodes;
+        *held = (*held).max(self.state.pinched.len());
         let moved = if separating { self.walk_out(&hits, &trapped) } else { 0 };
         let exempt: Vec<bool> = hits
             .iter()
