@@ -58,6 +58,13 @@ pub fn find_crossings(cloth: Soup, obstacles: Soup) -> Crossings {
     Crossings { cloth: self_crossings(cloth, &tree, &boxes), obstacle: crossings_with(cloth, &tree, &boxes, obstacles) }
 }
 
+/// Every crossing pair of `cloth` with itself (a < b), sorted: `find_crossings`' cloth list alone.
+pub fn find_self_crossings(cloth: Soup) -> Vec<(usize, usize)> {
+    let boxes = cloth.boxes();
+    let tree = Bvh::build(&boxes);
+    self_crossings(cloth, &tree, &boxes)
+}
+
 /// Pairs of `soup`'s triangles, sharing no node, that cross; sorted.
 fn self_crossings(soup: Soup, tree: &Bvh, boxes: &[Aabb]) -> Vec<(usize, usize)> {
     let mut out = tree.overlapping(tree, true, open_overlap, |p, q, out: &mut Vec<(usize, usize)>| {

@@ -1,7 +1,8 @@
 //! Obstacles and collisions: obstacle descriptions (`shape`) and the bodies meshed from them
 //! (`obstacle`), broad phase, proximity repulsion, continuous collision detection and impact-zone
 //! resolution (with rigid zones as its last resort), with their parameters (`params`); the exact count of crossing triangle pairs that
-//! checks each written frame (`crossings`).
+//! checks each written frame (`crossings`), and the analysis of where cloth has crossed itself
+//! that takes it back (`untangle`).
 
 pub mod areas;
 pub mod broad;
@@ -18,4 +19,5 @@ pub mod rigid_zone;
 pub mod sdf;
 pub mod shape;
 pub mod speculative;
+pub mod untangle;
 pub mod world;

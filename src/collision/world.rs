@@ -23,6 +23,7 @@ use super::proximity::{
     edge_edge_contact, node_face_contact, obstacle_edge_contact, obstacle_vertex_contact, Contact, Law,
 };
 use super::sdf::MeshSdf;
+use super::untangle::exempt_pair;
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
 
@@ -54,6 +55,9 @@ pub struct CollisionCounters {
     pub yielded_nodes: usize,
     /// The most cloth nodes held in a pinch at one step (`sim::separate`; a maximum, not a sum).
     pub pinched_nodes: usize,
+    /// Cloth nodes moved back through cloth they had crossed (`sim::untangle`; summed over the
+    /// steps).
+    pub untangled_nodes: usize,
     /// Friction contacts sticking and sliding at the accepted solves.
     pub sticking: usize,
     pub sliding: usize,
@@ -95,6 +99,10 @@ pub struct CollisionWorld {
     /// Cloth nodes whose elements take no obstacle contact or impact: nodes inside an obstacle
     /// while `sim::separate` moves them out (or holds them, inside two that overlap).
     pub exempt: Vec<bool>,
+    /// Per cloth node, the region masks of the cloth the untangling stage is taking back through
+    /// itself this step (`untangle::Tangle::masks`): a region takes no contact or impact with the
+    /// faces it passes through. Empty when nothing is tangled.
+    pub untangling: Vec<(u64, u64)>,
 }
 
 /// A body's signed distance field and the time of the positions it holds.
@@ -121,6 +129,7 @@ impl CollisionWorld {
             broad: BroadPhase::default(),
             sdfs: Vec::new(),
             exempt: Vec::new(),
+            untangling: Vec::new(),
         };
         w.sdfs = w.bodies.iter().map(|_| Mutex::new(None)).collect();
         w.lay_out();
@@ -286,7 +295,7 @@ impl CollisionWorld {
         let mut broad = std::mem::take(&mut self.broad);
         let this = &*self;
         let narrow = |(kind, nodes): Candidate| {
-            if exempt_against_obstacle(&this.exempt, &nodes, n) {
+            if exempt_against_obstacle(&this.exempt, &nodes, n) || exempt_pair(&this.untangling, kind == VF, &nodes) {
                 return None;
             }
             let xs = nodes.map(pos);

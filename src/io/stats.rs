@@ -150,6 +150,10 @@ pub struct CollisionFrameStats {
     /// separation stage's hold: they cross the obstacles there, as in ARCSim).
     #[serde(default)]
     pub pinched_nodes: usize,
+    /// Cloth nodes the untangling stage moved back through cloth they had crossed, summed over
+    /// the frame's steps (`sim::untangle`).
+    #[serde(default)]
+    pub untangled_nodes: usize,
     /// Cloth nodes deeper than thickness/2 inside an obstacle at the frame end (must be 0).
     pub penetrations: usize,
     /// Friction contacts sticking and sliding at the accepted solves (summed over the steps).

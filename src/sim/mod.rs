@@ -2,7 +2,7 @@
 //! derived from them (`workspace`), the step as a list of named, timed stages (`step`) with its
 //! fault checks (`checks`) and retries (`recover`), the plasticity stage (`plastic`), the
 //! remeshing stage (`adapt`) and its pop filter (`pop`), the separation of cloth that starts
-//! inside obstacles (`separate`), checkpoints and the run that writes frames (`run`).
+//! inside obstacles (`separate`) and of cloth that has crossed itself (`untangle`), checkpoints and the run that writes frames (`run`).
 
 mod adapt;
 pub mod checkpoint;
@@ -21,6 +21,7 @@ mod separate;
 pub mod state;
 mod step;
 pub mod timers;
+mod untangle;
 pub mod workspace;
 
 pub use run::{

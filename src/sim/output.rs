@@ -239,6 +239,7 @@ fn frame_stats(sim: &mut Simulation, number: usize, adaptive: bool) -> FrameStat
             rigid_zones: c.rigid_zones,
             yielded_nodes: c.yielded_nodes,
             pinched_nodes: c.pinched_nodes,
+            untangled_nodes: c.untangled_nodes,
             penetrations: sim.penetrations(),
             sticking: c.sticking,
             sliding: c.sliding,

@@ -98,6 +98,7 @@ impl Simulation {
     pub fn step(&mut self, h: Real) -> Result<(), SimError> {
         self.release_trapped();
         self.timed(Stage::Separation, |s| s.separate(h));
+        self.timed(Stage::Separation, Simulation::untangle);
         let t1 = self.state.time + h;
         let result = self.step_to(h, t1, 0);
         // The separation's hold is the step's: a remesh after it numbers the nodes anew.
@@ -105,11 +106,13 @@ impl Simulation {
         result
     }
 
-    /// Forgets the nodes the separation stage holds or exempts from obstacle collisions.
+    /// Forgets the nodes the separation stage holds or exempts from obstacle collisions, and the
+    /// untangling stage's exemptions.
     fn release_trapped(&mut self) {
         self.ws.trapped.clear();
         if let Some(world) = &mut self.ws.collisions {
             world.exempt.clear();
+            world.untangling.clear();
         }
     }
 

@@ -107,6 +107,7 @@ impl Simulation {
         if every.is_some_and(|e| self.state.frame.is_multiple_of(e)) {
             self.remesh_counted()?;
         }
+        self.ws.untangle_due = true;
         self.state.frame += 1;
         Ok(())
     }

@@ -57,6 +57,9 @@ pub struct Workspace {
     /// they were computed for: the frame end's stats and the next frame's remesh see the same
     /// state, so the second reuses the first.
     pub views: Option<(u64, Vec<Option<FaceView>>)>,
+    /// Whether the untangling stage looks for cloth crossing itself at the next step: set at
+    /// every frame start, kept while it finds crossings it can take back (`untangle.rs`).
+    pub untangle_due: bool,
 }
 
 impl Workspace {
@@ -86,6 +89,7 @@ impl Workspace {
             trapped: Vec::new(),
             pinch_faces: None,
             views: None,
+            untangle_due: true,
         })
     }
 

@@ -7,6 +7,7 @@ use crate::collision::broad::{Candidate, Interval, VF};
 use crate::collision::ccd::{edge_edge_ccd, vertex_face_ccd, Impact, CCD_TOLERANCE};
 use crate::collision::impact_zones::{resolve_zone, ZoneConstraint, ZoneState};
 use crate::collision::rigid_zone::resolve_zone_rigid;
+use crate::collision::untangle::exempt_pair;
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
 
@@ -31,9 +32,9 @@ impl CollisionWorld {
             |i: usize| if i < n { x1[i] } else { self.obs_x1[i - n] },
         );
         let outward = &self.obs_normals;
-        let exempt = &self.exempt;
+        let (exempt, untangling) = (&self.exempt, &self.untangling);
         let narrow = |(kind, nodes): Candidate| {
-            if exempt_against_obstacle(exempt, &nodes, n) {
+            if exempt_against_obstacle(exempt, &nodes, n) || exempt_pair(untangling, kind == VF, &nodes) {
                 return None;
             }
             let (a, b) = (nodes.map(p0), nodes.map(p1));
