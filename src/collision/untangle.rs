@@ -350,7 +350,7 @@ fn local_moves(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::collision::crossings::{find_crossings, Soup};
+    use crate::collision::crossings::{find_self_crossings, Soup};
     use crate::mesh::{rectangle, NodeId, VertId};
 
     /// Two flat sheets, one 1 cm above the other, with one interior node of the upper one
@@ -383,7 +383,7 @@ mod tests {
 
     fn crossings(mesh: &Mesh, x: &[Vec3]) -> Vec<(usize, usize)> {
         let tris: Vec<[usize; 3]> = (0..mesh.faces.len()).map(|f| mesh.face_nodes(f)).collect();
-        find_crossings(Soup { x, tris: &tris }, Soup { x: &[], tris: &[] }).cloth
+        find_self_crossings(Soup { x, tris: &tris })
     }
 
     #[test]
