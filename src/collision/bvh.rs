@@ -181,8 +181,21 @@ impl Bvh {
     /// returned (and one whose box is no nearer than the best is never visited). The order is a
     /// function of this tree's shape and boxes and of `p`: deterministic, independent of threads.
     pub fn nearest<T>(&self, p: &Vec3, closest: impl Fn(usize) -> (Real, T)) -> Option<(usize, T)> {
+        self.nearest_within(p, Real::INFINITY, closest)
+    }
+
+    /// `nearest` among the primitives whose squared distance is below `bound2`: boxes no
+    /// nearer than `bound2` are skipped from the start. When the nearest primitive lies within
+    /// the bound the answer is `nearest`'s, ties included: the boxes visited keep their order,
+    /// and every box skipped here holds only primitives farther than the one returned.
+    pub fn nearest_within<T>(
+        &self,
+        p: &Vec3,
+        bound2: Real,
+        closest: impl Fn(usize) -> (Real, T),
+    ) -> Option<(usize, T)> {
         let mut best: Option<(usize, T)> = None;
-        let mut best_d2 = Real::INFINITY;
+        let mut best_d2 = bound2;
         let mut stack: Vec<(u32, Real)> = Vec::with_capacity(64);
         if let Some(root) = self.nodes.first() {
             stack.push((0, root.aabb.distance_squared(p)));

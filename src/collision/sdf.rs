@@ -152,7 +152,15 @@ impl MeshSdf {
 
     /// Signed distance, closest point and normal for `p`; `None` for a mesh without faces.
     pub fn query(&self, p: &Vec3) -> Option<SdfHit> {
-        let (tri, c) = self.tree.nearest(p, |f| {
+        self.query_within(p, Real::INFINITY)
+    }
+
+    /// `query` when the surface is nearer than `range` (the same answer), else `None`; the
+    /// search skips everything farther (`Bvh::nearest_within`).
+    pub fn query_within(&self, p: &Vec3, range: Real) -> Option<SdfHit> {
+        // Squared with a margin, so that rounding in d² never drops a point at d < range.
+        let bound2 = range * range * (1.0 + 1e-9);
+        let (tri, c) = self.tree.nearest_within(p, bound2, |f| {
             let [a, b, d] = self.triangles[f].map(|i| &self.x[i]);
             let c = closest_point_triangle(p, a, b, d);
             (c.dist, c)
@@ -168,6 +176,11 @@ impl MeshSdf {
     /// `query` for every point, in parallel; result `i` belongs to `points[i]`.
     pub fn query_all(&self, points: &[Vec3]) -> Vec<Option<SdfHit>> {
         points.par_iter().map(|p| self.query(p)).collect()
+    }
+
+    /// `query_within` for every point, in parallel.
+    pub fn query_all_within(&self, points: &[Vec3], range: Real) -> Vec<Option<SdfHit>> {
+        points.par_iter().map(|p| self.query_within(p, range)).collect()
     }
 
     /// `query` for every point that lies inside (negative distance), in parallel; `None` for
@@ -372,6 +385,38 @@ mod tests {
             assert_eq!(s.distance.to_bits(), q.distance.to_bits());
             assert_eq!(s.triangle, q.triangle);
         }
+    }
+
+    /// A query within a range gives the unbounded query's hit, bit for bit (triangle, point,
+    /// sign), wherever the surface is nearer than the range, and nothing elsewhere; on a
+    /// tessellated sphere, where many triangles tie in distance for points near the axis.
+    #[test]
+    fn bounded_queries_match_unbounded_within_the_range() {
+        let (x, tris) = sphere_mesh(0.5, CHORDAL_TOLERANCE);
+        let sdf = MeshSdf::new(&tris, &x);
+        let mut pts = points(3000, 1.0);
+        pts.extend((0..50).map(|k| Vec3::new(0.0, 0.0, 0.3 + 0.01 * k as Real)));
+        let (mut inside, mut outside) = (0, 0);
+        for range in [0.02, 0.1, 0.4] {
+            for p in &pts {
+                let full = sdf.query(p).unwrap();
+                match sdf.query_within(p, range) {
+                    Some(h) => {
+                        assert!(full.distance.abs() < range * (1.0 + 1e-6), "{p:?}");
+                        assert_eq!(h.triangle, full.triangle);
+                        assert_eq!(h.distance.to_bits(), full.distance.to_bits());
+                        assert_eq!(h.point.map(Real::to_bits), full.point.map(Real::to_bits));
+                        assert_eq!(h.normal.map(Real::to_bits), full.normal.map(Real::to_bits));
+                        inside += 1;
+                    }
+                    None => {
+                        assert!(full.distance.abs() >= range, "{p:?}: {} < {range}", full.distance);
+                        outside += 1;
+                    }
+                }
+            }
+        }
+        assert!(inside > 500 && outside > 500, "{inside} / {outside}");
     }
 
     #[test]

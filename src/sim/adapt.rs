@@ -61,7 +61,9 @@ impl Simulation {
         let x = self.state.mesh.positions();
         let mut best: Vec<Option<(Real, ObstaclePlane)>> = vec![None; x.len()];
         for b in (0..world.bodies.len()).filter(|&b| world.present(b, self.state.time)) {
-            for (i, hit) in world.with_sdf(b, self.state.time, |sdf| sdf.query_all(&x)).into_iter().enumerate() {
+            for (i, hit) in
+                world.with_sdf(b, self.state.time, |sdf| sdf.query_all_within(&x, range)).into_iter().enumerate()
+            {
                 let Some(hit) = hit else { continue };
                 let d = hit.distance.abs();
                 if d < range && best[i].is_none_or(|(b, _)| d < b) {
