@@ -24,6 +24,9 @@ pub const USD_FILE: &str = "cloth.usda";
 /// The folder of the per-frame USD samples the layer is assembled from.
 pub const USD_SAMPLES: &str = usd::SAMPLES_DIR;
 
+/// The longest a running simulation leaves frames out of its stats.json (`Output::frames`).
+pub const STATS_INTERVAL: std::time::Duration = std::time::Duration::from_secs(1);
+
 /// Where and how a run writes.
 pub(super) struct Output<'a> {
     pub dir: &'a Path,
@@ -114,8 +117,14 @@ impl Output<'_> {
         write_stats(self.dir, stats)
     }
 
-    /// Writes the checkpoint of frame `k` when due (every `every` frames and at the last) or
-    /// `now`, then removes all but it and the one before it. Returns its path when written.
+    /// Whether frame `k` of a run ending at `last` gets a checkpoint (every `every` frames and
+    /// at the last).
+    fn checkpoint_due(&self, k: usize, last: usize) -> bool {
+        self.record.as_ref().is_some_and(|r| r.every > 0 && k > 0 && (k.is_multiple_of(r.every) || k == last))
+    }
+
+    /// Writes the checkpoint of frame `k` when due (`checkpoint_due`) or `now`, then removes
+    /// all but it and the one before it. Returns its path when written.
     fn checkpoint(
         &self,
         sim: &mut Simulation,
@@ -125,8 +134,7 @@ impl Output<'_> {
         now: bool,
     ) -> Result<Option<PathBuf>, RunError> {
         let Some(record) = &self.record else { return Ok(None) };
-        let due = record.every > 0 && k > 0 && (k.is_multiple_of(record.every) || k == last);
-        if !due && !now {
+        if !self.checkpoint_due(k, last) && !now {
             return Ok(None);
         }
         let clock = Instant::now();
@@ -152,6 +160,7 @@ impl Output<'_> {
         wall_before: f64,
     ) -> Result<RunStats, RunError> {
         let started = Instant::now();
+        let mut stats_written: Option<Instant> = None;
         let scene = &sim.scene;
         let report = Reporter::start(progress, &scene.name, (first, last), scene.start_frame, scene.preroll_frames);
         for k in first..=last {
@@ -175,7 +184,17 @@ impl Output<'_> {
             fs.wall_s = clock.elapsed().as_secs_f64();
             record(&mut stats, fs, k, number.is_some(), sim.ws.timers.ran());
             stats.total_wall_s = wall_before + started.elapsed().as_secs_f64();
-            self.write_stats(&stats)?;
+            // stats.json holds every frame so far, so rewriting it each frame costs the run's
+            // length squared: it is rewritten at the first and last frame, before each
+            // checkpoint (frame → stats.json → checkpoint), and otherwise at most every
+            // `STATS_INTERVAL`.
+            let due = stats_written.is_none_or(|t| t.elapsed() >= STATS_INTERVAL)
+                || k == last
+                || self.checkpoint_due(k, last);
+            if due {
+                self.write_stats(&stats)?;
+                stats_written = Some(Instant::now());
+            }
             self.checkpoint(sim, &stats, k, last, false)?;
             report.frame(k, fs_wall(&stats), sim.state.mesh.faces.len());
             if k < last && super::interrupt::requested() {
