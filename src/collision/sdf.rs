@@ -155,7 +155,8 @@ impl MeshSdf {
         self.query_within(p, Real::INFINITY)
     }
 
-    /// `query` when the surface is nearer than `range` (the same answer), else `None`; the
+    /// `query` when the surface is nearer than `range` (the same answer), else `None` (or,
+    /// within a relative 1e-9 beyond the range, the hit: callers compare the distance); the
     /// search skips everything farther (`Bvh::nearest_within`).
     pub fn query_within(&self, p: &Vec3, range: Real) -> Option<SdfHit> {
         // Squared with a margin, so that rounding in d² never drops a point at d < range.
@@ -175,7 +176,7 @@ impl MeshSdf {
 
     /// `query` for every point, in parallel; result `i` belongs to `points[i]`.
     pub fn query_all(&self, points: &[Vec3]) -> Vec<Option<SdfHit>> {
-        points.par_iter().map(|p| self.query(p)).collect()
+        self.query_all_within(points, Real::INFINITY)
     }
 
     /// `query_within` for every point, in parallel.
