@@ -318,9 +318,12 @@ impl CollisionWorld {
                 VF => node_face_contact(nodes, &xs, detect, k),
                 _ if nodes[2] >= n => {
                     let e = [(nodes[2] - n).min(nodes[3] - n), (nodes[2] - n).max(nodes[3] - n)];
-                    let opposite: &[usize] =
-                        this.obs_edges.binary_search(&e).map_or(&[], |i| &this.obs_edge_opposite[i]);
-                    let opposite = opposite.iter().map(|&o| this.obs_x1[o]);
+                    // Looked up only for a pair within reach (most candidates are not).
+                    let opposite = std::iter::once(e).flat_map(|e| {
+                        let ids: &[usize] =
+                            this.obs_edges.binary_search(&e).map_or(&[], |i| &this.obs_edge_opposite[i]);
+                        ids.iter().map(|&o| this.obs_x1[o])
+                    });
                     obstacle_edge_contact(nodes, &xs, detect, k, reach.max(detect), &out, opposite)
                 }
                 _ => edge_edge_contact(nodes, &xs, detect, k),
