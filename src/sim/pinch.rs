@@ -208,12 +208,25 @@ pub(super) fn bands<'a>(
         cloth_tree.query(&bx.inflate(reach + th), &cloth_boxes, |_| hit = true);
         hit
     };
+    // The box of some faces of a body at positions x.
+    let faces_box = |tris: &[[usize; 3]], x: &[Vec3], faces: &[usize]| {
+        faces
+            .iter()
+            .fold(Aabb::empty(), |bx, &f| tris[f].iter().fold(bx, |bx, &i| bx.merge(&Aabb { min: x[i], max: x[i] })))
+    };
     let mut out = Vec::new();
     for (a, b, fa, fb) in &cache.pairs {
         let (Some(xa), Some(xb)) = (positions[*a].as_deref(), positions[*b].as_deref()) else { continue };
+        // A side none of whose faces is near the cloth makes no band: one query for the box of
+        // all its faces instead of one per face (most of a dancer's part pairs are far from the
+        // dress).
+        let (ta, tb) = (world.bodies[*a].triangles(), world.bodies[*b].triangles());
+        if !near_cloth(&faces_box(ta, xa, fa)) || !near_cloth(&faces_box(tb, xb, fb)) {
+            continue;
+        }
         // Each side's faces near the cloth, with boxes and normals at t.
-        let side_a = faces_where(world.bodies[*a].triangles(), xa, fa.iter().copied(), near_cloth);
-        let side_b = faces_where(world.bodies[*b].triangles(), xb, fb.iter().copied(), near_cloth);
+        let side_a = faces_where(ta, xa, fa.iter().copied(), near_cloth);
+        let side_b = faces_where(tb, xb, fb.iter().copied(), near_cloth);
         let Some((side_a, side_b)) = facing_pairs(&side_a, &side_b, reach, BAND_FACING) else { continue };
         let patch = |k: usize, x: &'a [Vec3], faces| Patch::new(k, x, world.bodies[k].triangles(), faces, reach);
         out.push(Band { sides: [patch(*a, xa, side_a), patch(*b, xb, side_b)] });
