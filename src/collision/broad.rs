@@ -7,7 +7,7 @@ use crate::math::PAR_GRAIN;
 use rayon::prelude::*;
 
 use super::bvh::{Aabb, Bvh};
-use crate::math::{Real, Vec3};
+use crate::math::{same_bits, Real, Vec3};
 use crate::mesh::Mesh;
 
 /// A candidate pair: `VF` = `[p, a, b, c]` (vertex p, face abc), `EE` = `[a0, a1, b0, b1]`.
@@ -76,11 +76,7 @@ struct ObsFit {
 impl ObsFit {
     /// Whether the fit is for these positions (bitwise: a signed zero counts as a change).
     fn holds(&self, iv: &Interval) -> bool {
-        let same = |a: &[Vec3], b: &[Vec3]| {
-            a.len() == b.len()
-                && a.iter().zip(b).all(|(p, q)| p.iter().zip(q.iter()).all(|(x, y)| x.to_bits() == y.to_bits()))
-        };
-        same(&self.obs0, iv.obs0) && same(&self.obs1, iv.obs1)
+        same_bits(&self.obs0, iv.obs0) && same_bits(&self.obs1, iv.obs1)
     }
 }
 

@@ -24,7 +24,7 @@ use super::proximity::{
 };
 use super::sdf::MeshSdf;
 use super::untangle::exempt_pair;
-use crate::math::{Real, Vec3};
+use crate::math::{same_bits, Real, Vec3};
 use crate::mesh::Mesh;
 
 /// Separation the impact-zone projection enforces, as a fraction of the thickness.
@@ -487,11 +487,6 @@ impl CollisionWorld {
 /// Whether a candidate pairs an obstacle with cloth that has an `exempt` node (`n` cloth nodes).
 fn exempt_against_obstacle(exempt: &[bool], nodes: &[usize; 4], n: usize) -> bool {
     !exempt.is_empty() && nodes.iter().any(|&i| i >= n) && nodes.iter().any(|&i| i < n && exempt[i])
-}
-
-/// Bitwise equality (a signed zero counts as a change).
-fn same_bits(a: &[Vec3], b: &[Vec3]) -> bool {
-    a.len() == b.len() && a.iter().zip(b).all(|(p, q)| p.iter().zip(q.iter()).all(|(x, y)| x.to_bits() == y.to_bits()))
 }
 
 #[cfg(test)]

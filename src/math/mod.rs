@@ -56,6 +56,11 @@ pub fn cross2(a: &Vec2, b: &Vec2) -> Real {
     a.x * b.y - a.y * b.x
 }
 
+/// Bitwise equality of two point lists (a signed zero counts as a change).
+pub fn same_bits(a: &[Vec3], b: &[Vec3]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).all(|(p, q)| p.iter().zip(q.iter()).all(|(x, y)| x.to_bits() == y.to_bits()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

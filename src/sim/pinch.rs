@@ -210,9 +210,7 @@ pub(super) fn bands<'a>(
     };
     // The box of some faces of a body at positions x.
     let faces_box = |tris: &[[usize; 3]], x: &[Vec3], faces: &[usize]| {
-        faces
-            .iter()
-            .fold(Aabb::empty(), |bx, &f| tris[f].iter().fold(bx, |bx, &i| bx.merge(&Aabb { min: x[i], max: x[i] })))
+        Aabb::from_points(faces.iter().flat_map(|&f| tris[f].map(|i| &x[i])))
     };
     let mut out = Vec::new();
     for (a, b, fa, fb) in &cache.pairs {
