@@ -165,24 +165,28 @@ impl BandCache {
             .collect();
         let boxes: Vec<_> =
             (0..world.bodies.len()).map(|b| world.body_box(b, t).map(|bx| bx.inflate(th + travel[b]))).collect();
-        let mut pairs = Vec::new();
-        for (a, b) in (0..boxes.len()).flat_map(|a| (a + 1..boxes.len()).map(move |b| (a, b))) {
-            let (Some(box_a), Some(box_b), Some(xa), Some(xb)) =
-                (boxes[a], boxes[b], positions[a].as_deref(), positions[b].as_deref())
-            else {
-                continue;
-            };
-            if !box_a.overlaps(&box_b) {
-                continue;
-            }
-            let reach = 2.0 * th + travel[a] + travel[b];
-            let (ta, tb) = (world.bodies[a].triangles(), world.bodies[b].triangles());
-            let (ra, rb) = (box_b.inflate(reach), box_a.inflate(reach));
-            let side_a = faces_where(ta, xa, 0..ta.len(), |bx| bx.overlaps(&ra));
-            let side_b = faces_where(tb, xb, 0..tb.len(), |bx| bx.overlaps(&rb));
-            let Some((side_a, side_b)) = facing_pairs(&side_a, &side_b, reach, FRAME_FACING) else { continue };
-            pairs.push((a, b, side_a, side_b));
-        }
+        // Pairs of present bodies whose boxes meet, then each pair's facing faces (the heavy
+        // part) in parallel, kept in pair order.
+        let meeting: Vec<(usize, usize, Aabb, Aabb)> = (0..boxes.len())
+            .flat_map(|a| (a + 1..boxes.len()).map(move |b| (a, b)))
+            .filter_map(|(a, b)| match (boxes[a], boxes[b]) {
+                (Some(box_a), Some(box_b)) if box_a.overlaps(&box_b) => Some((a, b, box_a, box_b)),
+                _ => None,
+            })
+            .collect();
+        let pairs = meeting
+            .par_iter()
+            .filter_map(|&(a, b, box_a, box_b)| {
+                let (xa, xb) = (positions[a].as_deref()?, positions[b].as_deref()?);
+                let reach = 2.0 * th + travel[a] + travel[b];
+                let (ta, tb) = (world.bodies[a].triangles(), world.bodies[b].triangles());
+                let (ra, rb) = (box_b.inflate(reach), box_a.inflate(reach));
+                let side_a = faces_where(ta, xa, 0..ta.len(), |bx| bx.overlaps(&ra));
+                let side_b = faces_where(tb, xb, 0..tb.len(), |bx| bx.overlaps(&rb));
+                let (side_a, side_b) = facing_pairs(&side_a, &side_b, reach, FRAME_FACING)?;
+                Some((a, b, side_a, side_b))
+            })
+            .collect();
         BandCache { frame, present, pairs }
     }
 }
@@ -212,24 +216,27 @@ pub(super) fn bands<'a>(
     let faces_box = |tris: &[[usize; 3]], x: &[Vec3], faces: &[usize]| {
         Aabb::from_points(faces.iter().flat_map(|&f| tris[f].map(|i| &x[i])))
     };
-    let mut out = Vec::new();
-    for (a, b, fa, fb) in &cache.pairs {
-        let (Some(xa), Some(xb)) = (positions[*a].as_deref(), positions[*b].as_deref()) else { continue };
-        // A side none of whose faces is near the cloth makes no band: one query for the box of
-        // all its faces instead of one per face (most of a dancer's part pairs are far from the
-        // dress).
-        let (ta, tb) = (world.bodies[*a].triangles(), world.bodies[*b].triangles());
-        if !near_cloth(&faces_box(ta, xa, fa)) || !near_cloth(&faces_box(tb, xb, fb)) {
-            continue;
-        }
-        // Each side's faces near the cloth, with boxes and normals at t.
-        let side_a = faces_where(ta, xa, fa.iter().copied(), near_cloth);
-        let side_b = faces_where(tb, xb, fb.iter().copied(), near_cloth);
-        let Some((side_a, side_b)) = facing_pairs(&side_a, &side_b, reach, BAND_FACING) else { continue };
-        let patch = |k: usize, x: &'a [Vec3], faces| Patch::new(k, x, world.bodies[k].triangles(), faces, reach);
-        out.push(Band { sides: [patch(*a, xa, side_a), patch(*b, xb, side_b)] });
-    }
-    out
+    // Each pair in parallel, the bands kept in pair order.
+    cache
+        .pairs
+        .par_iter()
+        .filter_map(|(a, b, fa, fb)| {
+            let (xa, xb) = (positions[*a].as_deref()?, positions[*b].as_deref()?);
+            // A side none of whose faces is near the cloth makes no band: one query for the box
+            // of all its faces instead of one per face (most of a dancer's part pairs are far
+            // from the dress).
+            let (ta, tb) = (world.bodies[*a].triangles(), world.bodies[*b].triangles());
+            if !near_cloth(&faces_box(ta, xa, fa)) || !near_cloth(&faces_box(tb, xb, fb)) {
+                return None;
+            }
+            // Each side's faces near the cloth, with boxes and normals at t.
+            let side_a = faces_where(ta, xa, fa.iter().copied(), near_cloth);
+            let side_b = faces_where(tb, xb, fb.iter().copied(), near_cloth);
+            let (side_a, side_b) = facing_pairs(&side_a, &side_b, reach, BAND_FACING)?;
+            let patch = |k: usize, x: &'a [Vec3], faces| Patch::new(k, x, world.bodies[k].triangles(), faces, reach);
+            Some(Band { sides: [patch(*a, xa, side_a), patch(*b, xb, side_b)] })
+        })
+        .collect()
 }
 
 /// Some faces of a body at positions `x`: those `keep` accepts by their box, with their boxes
