@@ -55,15 +55,12 @@ pub struct BroadPhase {
     cloth_faces: Option<Bvh>,
     cloth_edges: Option<Bvh>,
     cloth_nodes: Option<Bvh>,
-    obs_faces: Option<Bvh>,
-    obs_edges: Option<Bvh>,
-    obs_nodes: Option<Bvh>,
     obs_fit: Option<ObsFit>,
 }
 
-/// What the obstacle trees are fitted to: the interval's obstacle positions, the face and edge
-/// boxes over it, and the vertex boxes inflated by `pad` (the one part that depends on the
-/// search's padding).
+/// The obstacle trees and what they are fitted to: the interval's obstacle positions, the face
+/// and edge boxes over it, and the vertex boxes inflated by `pad` (the one part that depends on
+/// the search's padding).
 struct ObsFit {
     obs0: Vec<Vec3>,
     obs1: Vec<Vec3>,
@@ -71,6 +68,9 @@ struct ObsFit {
     edges: Vec<Aabb>,
     pad: Real,
     nodes: Vec<Aabb>,
+    face_tree: Bvh,
+    edge_tree: Bvh,
+    node_tree: Bvh,
 }
 
 impl ObsFit {
@@ -159,13 +159,9 @@ impl BroadPhase {
         if !obs_tris.is_empty() {
             let fit = self.fit_obstacles(obs_tris, obs_edges, iv, pad);
             let (of_boxes, oe_boxes, on_boxes) = (&fit.faces, &fit.edges, &fit.nodes);
-            let (of, oe, on) = (
-                self.obs_faces.take().expect("fitted"),
-                self.obs_edges.take().expect("fitted"),
-                self.obs_nodes.take().expect("fitted"),
-            );
+            let (of, oe, on) = (&fit.face_tree, &fit.edge_tree, &fit.node_tree);
             // Cloth node vs obstacle face.
-            let found = cn.overlapping(&of, false, near, |p, t, v: &mut Vec<Found<T>>| {
+            let found = cn.overlapping(of, false, near, |p, t, v: &mut Vec<Found<T>>| {
                 if of_boxes[t].overlaps(&node_boxes[p]) {
                     let o = obs_tris[t];
                     keep(p, (VF, [p, o[0] + n, o[1] + n, o[2] + n]), v);
@@ -181,7 +177,7 @@ impl BroadPhase {
             });
             out.extend(by_query(found, on_boxes.len()));
             // Cloth edge vs obstacle edge.
-            let found = ce.overlapping(&oe, false, near_padded, |e, k, v: &mut Vec<Found<T>>| {
+            let found = ce.overlapping(oe, false, near_padded, |e, k, v: &mut Vec<Found<T>>| {
                 if oe_boxes[k].overlaps(&edge_boxes[e].inflate(pad)) {
                     let [a, b] = edges[e];
                     let [c, d] = obs_edges[k];
@@ -189,9 +185,6 @@ impl BroadPhase {
                 }
             });
             out.extend(by_query(found, edges.len()));
-            self.obs_faces = Some(of);
-            self.obs_edges = Some(oe);
-            self.obs_nodes = Some(on);
             self.obs_fit = Some(fit);
         }
         if self_collision {
@@ -232,37 +225,48 @@ impl BroadPhase {
             self.cloth_key = faces.to_vec();
         }
         if self.obs_key != obs_tris {
-            (self.obs_faces, self.obs_edges, self.obs_nodes) = (None, None, None);
             self.obs_fit = None;
             self.obs_key = obs_tris.to_vec();
         }
     }
 
     /// The obstacle boxes over `iv` (vertex boxes inflated by `pad`) with the obstacle trees
-    /// (`obs_faces`, `obs_edges`, `obs_nodes`) fitted to them: the last search's where it was
-    /// over the same positions (and, for the vertices, the same pad), recomputed and refitted
-    /// otherwise. Call after `forget_changed`.
+    /// fitted to them: the last search's where it was over the same positions (and, for the
+    /// vertices, the same pad), recomputed and its trees refitted otherwise (built for the first
+    /// search over these triangles). Call after `forget_changed`.
     fn fit_obstacles(&mut self, obs_tris: &[[usize; 3]], obs_edges: &[[usize; 2]], iv: &Interval, pad: Real) -> ObsFit {
         let node_boxes = |pad: Real| -> Vec<Aabb> {
             (0..iv.obs1.len()).into_par_iter().with_min_len(PAR_GRAIN).map(|k| iv.obs_box(&[k]).inflate(pad)).collect()
         };
-        let kept = self.obs_fit.take().filter(|fit| fit.holds(iv) && self.obs_faces.is_some());
-        match kept {
-            Some(fit) if fit.pad.to_bits() == pad.to_bits() => fit,
-            Some(mut fit) => {
+        match self.obs_fit.take() {
+            Some(fit) if fit.holds(iv) && fit.pad.to_bits() == pad.to_bits() => fit,
+            Some(mut fit) if fit.holds(iv) => {
                 fit.nodes = node_boxes(pad);
                 fit.pad = pad;
-                self.obs_nodes = Some(refit(&mut self.obs_nodes, &fit.nodes));
+                fit.node_tree = refit(&mut Some(fit.node_tree), &fit.nodes);
                 fit
             }
-            None => {
+            old => {
                 let faces: Vec<Aabb> = obs_tris.par_iter().with_min_len(PAR_GRAIN).map(|t| iv.obs_box(t)).collect();
                 let edges: Vec<Aabb> = obs_edges.par_iter().with_min_len(PAR_GRAIN).map(|e| iv.obs_box(e)).collect();
                 let nodes = node_boxes(pad);
-                self.obs_faces = Some(refit(&mut self.obs_faces, &faces));
-                self.obs_edges = Some(refit(&mut self.obs_edges, &edges));
-                self.obs_nodes = Some(refit(&mut self.obs_nodes, &nodes));
-                ObsFit { obs0: iv.obs0.to_vec(), obs1: iv.obs1.to_vec(), faces, edges, pad, nodes }
+                let (mut ft, mut et, mut nt) = match old {
+                    Some(f) => (Some(f.face_tree), Some(f.edge_tree), Some(f.node_tree)),
+                    None => (None, None, None),
+                };
+                let (face_tree, edge_tree, node_tree) =
+                    (refit(&mut ft, &faces), refit(&mut et, &edges), refit(&mut nt, &nodes));
+                ObsFit {
+                    obs0: iv.obs0.to_vec(),
+                    obs1: iv.obs1.to_vec(),
+                    faces,
+                    edges,
+                    pad,
+                    nodes,
+                    face_tree,
+                    edge_tree,
+                    node_tree,
+                }
             }
         }
     }

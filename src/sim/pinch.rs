@@ -233,8 +233,7 @@ pub(super) fn bands<'a>(
             let side_a = faces_where(ta, xa, fa.iter().copied(), near_cloth);
             let side_b = faces_where(tb, xb, fb.iter().copied(), near_cloth);
             let (side_a, side_b) = facing_pairs(&side_a, &side_b, reach, BAND_FACING)?;
-            let patch = |k: usize, x: &'a [Vec3], faces| Patch::new(k, x, world.bodies[k].triangles(), faces, reach);
-            Some(Band { sides: [patch(*a, xa, side_a), patch(*b, xb, side_b)] })
+            Some(Band { sides: [Patch::new(*a, xa, ta, side_a, reach), Patch::new(*b, xb, tb, side_b, reach)] })
         })
         .collect()
 }
