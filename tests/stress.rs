@@ -189,7 +189,7 @@ fn self_intersections(sim: &Simulation) -> usize {
     let tris: Vec<[usize; 3]> = (0..m.faces.len()).map(|f| m.face_nodes(f)).collect();
     let boxes: Vec<Aabb> = tris.iter().map(|t| Aabb::from_points(t.iter().map(|&n| &m.nodes[n].x))).collect();
     let bvh = Bvh::build(&boxes);
-    bvh.self_pairs(&boxes)
+    bvh.self_pairs()
         .into_iter()
         .filter(|&(a, b)| !tris[a].iter().any(|n| tris[b].contains(n)))
         .filter(|&(a, b)| triangles_intersect(&tris[a].map(|n| m.nodes[n].x), &tris[b].map(|n| m.nodes[n].x)))

@@ -58,16 +58,13 @@ pub struct BroadPhase {
     obs_fit: Option<ObsFit>,
 }
 
-/// The obstacle trees and what they are fitted to: the interval's obstacle positions, the face
-/// and edge boxes over it, and the vertex boxes inflated by `pad` (the one part that depends on
-/// the search's padding).
+/// The obstacle trees and what they are fitted to: the interval's obstacle positions (faces'
+/// and edges' boxes over it), and the padding the vertex boxes are inflated by (the one part
+/// that depends on the search). The trees hold the boxes.
 struct ObsFit {
     obs0: Vec<Vec3>,
     obs1: Vec<Vec3>,
-    faces: Vec<Aabb>,
-    edges: Vec<Aabb>,
     pad: Real,
-    nodes: Vec<Aabb>,
     face_tree: Bvh,
     edge_tree: Bvh,
     node_tree: Bvh,
@@ -158,27 +155,26 @@ impl BroadPhase {
 
         if !obs_tris.is_empty() {
             let fit = self.fit_obstacles(obs_tris, obs_edges, iv, pad);
-            let (of_boxes, oe_boxes, on_boxes) = (&fit.faces, &fit.edges, &fit.nodes);
             let (of, oe, on) = (&fit.face_tree, &fit.edge_tree, &fit.node_tree);
             // Cloth node vs obstacle face.
-            let found = cn.overlapping(of, false, near, |p, t, v: &mut Vec<Found<T>>| {
-                if of_boxes[t].overlaps(&node_boxes[p]) {
+            let found = cn.overlapping(of, false, near, |(p, pb), (t, tb), v: &mut Vec<Found<T>>| {
+                if tb.overlaps(pb) {
                     let o = obs_tris[t];
                     keep(p, (VF, [p, o[0] + n, o[1] + n, o[2] + n]), v);
                 }
             });
             out.extend(by_query(found, n));
             // Obstacle vertex vs cloth face.
-            let found = on.overlapping(&cf, false, near, |k, f, v: &mut Vec<Found<T>>| {
-                if face_boxes[f].overlaps(&on_boxes[k]) {
+            let found = on.overlapping(&cf, false, near, |(k, kb), (f, fb), v: &mut Vec<Found<T>>| {
+                if fb.overlaps(kb) {
                     let c = faces[f];
                     keep(k, (VF, [k + n, c[0], c[1], c[2]]), v);
                 }
             });
-            out.extend(by_query(found, on_boxes.len()));
+            out.extend(by_query(found, iv.obs1.len()));
             // Cloth edge vs obstacle edge.
-            let found = ce.overlapping(oe, false, near_padded, |e, k, v: &mut Vec<Found<T>>| {
-                if oe_boxes[k].overlaps(&edge_boxes[e].inflate(pad)) {
+            let found = ce.overlapping(oe, false, near_padded, |(e, eb), (k, kb), v: &mut Vec<Found<T>>| {
+                if kb.overlaps(&eb.inflate(pad)) {
                     let [a, b] = edges[e];
                     let [c, d] = obs_edges[k];
                     keep(e, (EE, [a, b, c + n, d + n]), v);
@@ -189,9 +185,9 @@ impl BroadPhase {
         }
         if self_collision {
             // Cloth node vs cloth face not containing it.
-            let found = cn.overlapping(&cf, false, near, |p, f, v: &mut Vec<Found<T>>| {
+            let found = cn.overlapping(&cf, false, near, |(p, pb), (f, fb), v: &mut Vec<Found<T>>| {
                 let c = faces[f];
-                if face_boxes[f].overlaps(&node_boxes[p]) && !c.contains(&p) {
+                if fb.overlaps(pb) && !c.contains(&p) {
                     keep(p, (VF, [p, c[0], c[1], c[2]]), v);
                 }
             });
@@ -201,9 +197,9 @@ impl BroadPhase {
             // near when either one's inflated box overlaps the other.
             let near_either = |a: &Aabb, b: &Aabb| near_padded(a, b) || near_padded(b, a);
             let found = ce.overlapping(&ce, true, near_either, |p, q, v: &mut Vec<Found<T>>| {
-                let (e, g) = (p.min(q), p.max(q));
+                let ((e, eb), (g, gb)) = if p.0 < q.0 { (p, q) } else { (q, p) };
                 let ([a, b], [c, d]) = (edges[e], edges[g]);
-                if a != c && a != d && b != c && b != d && edge_boxes[g].overlaps(&edge_boxes[e].inflate(pad)) {
+                if a != c && a != d && b != c && b != d && gb.overlaps(&eb.inflate(pad)) {
                     keep(e, (EE, [a, b, c, d]), v);
                 }
             });
@@ -241,9 +237,8 @@ impl BroadPhase {
         match self.obs_fit.take() {
             Some(fit) if fit.holds(iv) && fit.pad.to_bits() == pad.to_bits() => fit,
             Some(mut fit) if fit.holds(iv) => {
-                fit.nodes = node_boxes(pad);
                 fit.pad = pad;
-                fit.node_tree = refit(&mut Some(fit.node_tree), &fit.nodes);
+                fit.node_tree = refit(&mut Some(fit.node_tree), &node_boxes(pad));
                 fit
             }
             old => {
@@ -256,17 +251,7 @@ impl BroadPhase {
                 };
                 let (face_tree, edge_tree, node_tree) =
                     (refit(&mut ft, &faces), refit(&mut et, &edges), refit(&mut nt, &nodes));
-                ObsFit {
-                    obs0: iv.obs0.to_vec(),
-                    obs1: iv.obs1.to_vec(),
-                    faces,
-                    edges,
-                    pad,
-                    nodes,
-                    face_tree,
-                    edge_tree,
-                    node_tree,
-                }
+                ObsFit { obs0: iv.obs0.to_vec(), obs1: iv.obs1.to_vec(), pad, face_tree, edge_tree, node_tree }
             }
         }
     }

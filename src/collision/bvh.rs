@@ -75,6 +75,9 @@ struct Node {
 pub struct Bvh {
     nodes: Vec<Node>,
     order: Vec<u32>,
+    /// The primitives' boxes in `order`'s sequence: a leaf's boxes side by side in memory (the
+    /// tree–tree descent tests them without reaching into the caller's arrays).
+    leaf_boxes: Vec<Aabb>,
 }
 
 impl Bvh {
@@ -83,10 +86,12 @@ impl Bvh {
         let mut bvh = Bvh {
             nodes: Vec::with_capacity(2 * boxes.len() / LEAF_SIZE + 1),
             order: (0..boxes.len() as u32).collect(),
+            leaf_boxes: Vec::new(),
         };
         if !boxes.is_empty() {
             bvh.build_node(boxes, 0, boxes.len());
         }
+        bvh.leaf_boxes = bvh.order.iter().map(|&p| boxes[p as usize]).collect();
         bvh
     }
 
@@ -140,7 +145,12 @@ impl Bvh {
             let n = &self.nodes[i];
             let aabb = if n.count > 0 {
                 let (s, c) = (n.start as usize, n.count as usize);
-                self.order[s..s + c].iter().fold(Aabb::empty(), |a, &p| a.merge(&boxes[p as usize]))
+                let mut aabb = Aabb::empty();
+                for (slot, &p) in self.leaf_boxes[s..s + c].iter_mut().zip(&self.order[s..s + c]) {
+                    *slot = boxes[p as usize];
+                    aabb = aabb.merge(slot);
+                }
+                aabb
             } else {
                 self.nodes[n.left as usize].aabb.merge(&self.nodes[n.right as usize].aabb)
             };
@@ -228,14 +238,15 @@ impl Bvh {
         best
     }
 
-    /// Every pair (a, b), a from `self`, b from `other`, whose boxes overlap, sorted.
-    pub fn pairs(&self, boxes: &[Aabb], other: &Bvh, other_boxes: &[Aabb]) -> Vec<(usize, usize)> {
+    /// Every pair (a, b), a from `self`, b from `other`, whose boxes (as last built or
+    /// refitted) overlap, sorted.
+    pub fn pairs(&self, other: &Bvh) -> Vec<(usize, usize)> {
         let mut out = self.overlapping(
             other,
             false,
             |a, b| a.overlaps(b),
-            |p, q, out: &mut Vec<(usize, usize)>| {
-                if boxes[p].overlaps(&other_boxes[q]) {
+            |(p, pb), (q, qb), out: &mut Vec<(usize, usize)>| {
+                if pb.overlaps(qb) {
                     out.push((p, q));
                 }
             },
@@ -244,14 +255,15 @@ impl Bvh {
         out
     }
 
-    /// Every unordered pair (a < b) of this tree's primitives whose boxes overlap, sorted.
-    pub fn self_pairs(&self, boxes: &[Aabb]) -> Vec<(usize, usize)> {
+    /// Every unordered pair (a < b) of this tree's primitives whose boxes (as last built or
+    /// refitted) overlap, sorted.
+    pub fn self_pairs(&self) -> Vec<(usize, usize)> {
         let mut out = self.overlapping(
             self,
             true,
             |a, b| a.overlaps(b),
-            |p, q, out: &mut Vec<(usize, usize)>| {
-                if boxes[p].overlaps(&boxes[q]) {
+            |(p, pb), (q, qb), out: &mut Vec<(usize, usize)>| {
+                if pb.overlaps(qb) {
                     out.push((p.min(q), p.max(q)));
                 }
             },
@@ -261,11 +273,13 @@ impl Bvh {
     }
 
     /// Simultaneous descent of two trees (one query for all primitives instead of one per
-    /// primitive): calls `leaf(a, b, out)` for every primitive a of `self` and b of `other`
-    /// whose nodes pass `near` at every level. `near(node of self, node of other)` must hold
-    /// whenever `leaf` could report a pair below those nodes (boxes only grow up the tree). With
-    /// `same` (`other` is `self`), each unordered pair of distinct primitives is visited once,
-    /// in either order, and `near` must then be symmetric in that sense.
+    /// primitive): calls `leaf((a, box of a), (b, box of b), out)` for every primitive a of
+    /// `self` and b of `other` whose nodes pass `near` at every level, and a's own box against
+    /// b's leaf. `near(box in self, box in other)` must hold whenever `leaf` could report a pair
+    /// of primitives within those boxes (boxes only grow up the tree, and a primitive's box lies
+    /// in its leaf's). With `same` (`other` is `self`), each unordered pair of distinct
+    /// primitives is visited once, in either order, and `near` must then be symmetric in that
+    /// sense. The boxes passed are the ones the tree was last built or refitted with.
     ///
     /// The work is split into a fixed list of subtree pairs, run in parallel and concatenated
     /// in list order: the output does not depend on the thread count.
@@ -274,7 +288,7 @@ impl Bvh {
         other: &Bvh,
         same: bool,
         near: impl Fn(&Aabb, &Aabb) -> bool + Sync,
-        leaf: impl Fn(usize, usize, &mut Vec<T>) + Sync,
+        leaf: impl Fn((usize, &Aabb), (usize, &Aabb), &mut Vec<T>) + Sync,
     ) -> Vec<T> {
         use rayon::prelude::*;
         if self.nodes.is_empty() || other.nodes.is_empty() {
@@ -300,7 +314,7 @@ impl Bvh {
             let (mut out, mut stack) = (Vec::new(), vec![t]);
             while let Some(t) = stack.pop() {
                 if !self.expand(other, t, &near, &mut stack) {
-                    self.leaf_pairs(other, t, &leaf, &mut out);
+                    self.leaf_pairs(other, t, &near, &leaf, &mut out);
                 }
             }
             out
@@ -344,24 +358,40 @@ impl Bvh {
         true
     }
 
-    fn leaf_pairs<T>(&self, other: &Bvh, t: Visit, leaf: &impl Fn(usize, usize, &mut Vec<T>), out: &mut Vec<T>) {
-        fn prims(tree: &Bvh, i: u32) -> &[u32] {
+    /// The primitive pairs of a pair of leaves (or of one leaf with itself) for `leaf`; across
+    /// two leaves, a primitive whose box is not `near` the other leaf's box meets none of its
+    /// primitives.
+    fn leaf_pairs<T>(
+        &self,
+        other: &Bvh,
+        t: Visit,
+        near: &impl Fn(&Aabb, &Aabb) -> bool,
+        leaf: &impl Fn((usize, &Aabb), (usize, &Aabb), &mut Vec<T>),
+        out: &mut Vec<T>,
+    ) {
+        fn prims(tree: &Bvh, i: u32) -> (&[u32], &[Aabb]) {
             let n = &tree.nodes[i as usize];
-            &tree.order[n.start as usize..(n.start + n.count) as usize]
+            let range = n.start as usize..(n.start + n.count) as usize;
+            (&tree.order[range.clone()], &tree.leaf_boxes[range])
         }
         match t {
             Visit::Within(i) => {
-                let p = prims(self, i);
-                for (k, &a) in p.iter().enumerate() {
-                    for &b in &p[k + 1..] {
-                        leaf(a as usize, b as usize, out);
+                let (p, pb) = prims(self, i);
+                for k in 0..p.len() {
+                    for m in k + 1..p.len() {
+                        leaf((p[k] as usize, &pb[k]), (p[m] as usize, &pb[m]), out);
                     }
                 }
             }
             Visit::Across(i, j) => {
-                for &a in prims(self, i) {
-                    for &b in prims(other, j) {
-                        leaf(a as usize, b as usize, out);
+                let ((p, pb), (q, qb)) = (prims(self, i), prims(other, j));
+                let other_box = &other.nodes[j as usize].aabb;
+                for (&a, ab) in p.iter().zip(pb) {
+                    if !near(ab, other_box) {
+                        continue;
+                    }
+                    for (&b, bb) in q.iter().zip(qb) {
+                        leaf((a as usize, ab), (b as usize, bb), out);
                     }
                 }
             }
@@ -414,11 +444,11 @@ mod tests {
         let a = boxes(300, 1);
         let b = boxes(200, 2);
         let (mut ta, tb) = (Bvh::build(&a), Bvh::build(&b));
-        assert_eq!(ta.pairs(&a, &tb, &b), brute(&a, &b));
+        assert_eq!(ta.pairs(&tb), brute(&a, &b));
         let moved: Vec<Aabb> = a.iter().map(|x| Aabb { min: x.min * 0.7, max: x.max * 0.7 }).collect();
         ta.refit(&moved);
-        assert_eq!(ta.pairs(&moved, &tb, &b), brute(&moved, &b));
-        let selfp = ta.self_pairs(&moved);
+        assert_eq!(ta.pairs(&tb), brute(&moved, &b));
+        let selfp = ta.self_pairs();
         let want: Vec<_> = brute(&moved, &moved).into_iter().filter(|(i, j)| i < j).collect();
         assert_eq!(selfp, want);
         let mut hits = Vec::new();

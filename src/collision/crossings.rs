@@ -53,23 +53,21 @@ pub struct Crossings {
 /// Every crossing pair of `cloth` with itself and with `obstacles` (obstacles against each
 /// other are not looked at), each list sorted.
 pub fn find_crossings(cloth: Soup, obstacles: Soup) -> Crossings {
-    let boxes = cloth.boxes();
-    let tree = Bvh::build(&boxes);
-    Crossings { cloth: self_crossings(cloth, &tree, &boxes), obstacle: crossings_with(cloth, &tree, &boxes, obstacles) }
+    let tree = Bvh::build(&cloth.boxes());
+    Crossings { cloth: self_crossings(cloth, &tree), obstacle: crossings_with(cloth, &tree, obstacles) }
 }
 
 /// Every crossing pair of `cloth` with itself (a < b), sorted: `find_crossings`' cloth list alone.
 pub fn find_self_crossings(cloth: Soup) -> Vec<(usize, usize)> {
-    let boxes = cloth.boxes();
-    let tree = Bvh::build(&boxes);
-    self_crossings(cloth, &tree, &boxes)
+    let tree = Bvh::build(&cloth.boxes());
+    self_crossings(cloth, &tree)
 }
 
 /// Pairs of `soup`'s triangles, sharing no node, that cross; sorted.
-fn self_crossings(soup: Soup, tree: &Bvh, boxes: &[Aabb]) -> Vec<(usize, usize)> {
-    let mut out = tree.overlapping(tree, true, open_overlap, |p, q, out: &mut Vec<(usize, usize)>| {
+fn self_crossings(soup: Soup, tree: &Bvh) -> Vec<(usize, usize)> {
+    let mut out = tree.overlapping(tree, true, open_overlap, |(p, pb), (q, qb), out: &mut Vec<(usize, usize)>| {
         let (tp, tq) = (&soup.tris[p], &soup.tris[q]);
-        if open_overlap(&boxes[p], &boxes[q])
+        if open_overlap(pb, qb)
             && !tp.iter().any(|i| tq.contains(i))
             && triangles_cross(&soup.corners(p), &soup.corners(q))
         {
@@ -81,14 +79,14 @@ fn self_crossings(soup: Soup, tree: &Bvh, boxes: &[Aabb]) -> Vec<(usize, usize)>
 }
 
 /// Pairs (triangle of `soup`, triangle of `other`) that cross; sorted.
-fn crossings_with(soup: Soup, tree: &Bvh, boxes: &[Aabb], other: Soup) -> Vec<(usize, usize)> {
-    let other_boxes = other.boxes();
-    let other_tree = Bvh::build(&other_boxes);
-    let mut out = tree.overlapping(&other_tree, false, open_overlap, |p, q, out: &mut Vec<(usize, usize)>| {
-        if open_overlap(&boxes[p], &other_boxes[q]) && triangles_cross(&soup.corners(p), &other.corners(q)) {
-            out.push((p, q));
-        }
-    });
+fn crossings_with(soup: Soup, tree: &Bvh, other: Soup) -> Vec<(usize, usize)> {
+    let other_tree = Bvh::build(&other.boxes());
+    let mut out =
+        tree.overlapping(&other_tree, false, open_overlap, |(p, pb), (q, qb), out: &mut Vec<(usize, usize)>| {
+            if open_overlap(pb, qb) && triangles_cross(&soup.corners(p), &other.corners(q)) {
+                out.push((p, q));
+            }
+        });
     out.sort_unstable();
     out
 }
