@@ -7,7 +7,8 @@
 //! `build_cubic_spline`), each frame's transform followed by a fixed one (ARCSim's motion
 //! `transform`, applied after the body's own).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 
 use nalgebra::{Quaternion, UnitQuaternion};
 
@@ -35,18 +36,28 @@ impl MotFile {
     }
 }
 
-/// Reads and checks a `.mot` file; errors name the line.
-pub fn read_mot(path: &Path) -> Result<MotFile, InputError> {
+/// Reads and checks a `.mot` file; errors name the line. A scene names one file once per body
+/// (and once more per instance of a character): a file read before with the same text is
+/// parsed once per process.
+pub fn read_mot(path: &Path) -> Result<Arc<MotFile>, InputError> {
+    static PARSED: Mutex<Vec<(PathBuf, String, Arc<MotFile>)>> = Mutex::new(Vec::new());
     let text = std::fs::read_to_string(path).map_err(|e| InputError {
         file: path.to_path_buf(),
         location: None,
         msg: format!("cannot read motion file: {e}"),
     })?;
-    parse_mot(&text).map_err(|(line, msg)| InputError {
+    let mut parsed = PARSED.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+    if let Some((_, _, file)) = parsed.iter().find(|(p, t, _)| p == path && *t == text) {
+        return Ok(file.clone());
+    }
+    let file = Arc::new(parse_mot(&text).map_err(|(line, msg)| InputError {
         file: path.to_path_buf(),
         location: (line > 0).then(|| format!("line {line}")),
         msg,
-    })
+    })?);
+    parsed.retain(|(p, _, _)| p != path);
+    parsed.push((path.to_path_buf(), text, file.clone()));
+    Ok(file)
 }
 
 /// Parses `.mot` text; errors are (1-based line, message).
