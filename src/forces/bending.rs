@@ -88,6 +88,9 @@ pub fn bending(x: &[Vec3; 4], rest: &BendingRest, kb: Real, proj: Projection) ->
     let g = dihedral_gradient(&xv);
     let grad_theta = Vec12::from_fn(|r, _| g[r / 3].0[r % 3]);
     let grad = 2.0 * c * d * grad_theta;
+    if proj == Projection::Gradient {
+        return (energy, grad, Mat12::zeros());
+    }
     // Gauss–Newton form 2c ∇θ∇θᵀ is PSD; the exact Hessian adds 2c (θ − θ̄) ∇²θ.
     let mut hess = 2.0 * c * grad_theta * grad_theta.transpose();
     if proj == Projection::Exact {

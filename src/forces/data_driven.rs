@@ -211,6 +211,9 @@ pub fn measured_membrane(
     let b = rest.b();
     let jac = strain_jacobian(&f, &b);
     let grad = a * jac.transpose() * sigma;
+    if proj == Projection::Gradient {
+        return (energy, grad, crate::math::Mat9::zeros());
+    }
     let (tangent, s) = match proj {
         Projection::Exact => {
             // dσ/dε = C + (∂C/∂εⱼ) ε; ∂/∂ε₂ = ½ ∂/∂G₀₁.
@@ -223,7 +226,7 @@ pub fn measured_membrane(
             }
             (d, Mat2::new(sigma[0], sigma[2], sigma[2], sigma[1]))
         }
-        Projection::Psd | Projection::EnergyOnly => {
+        Projection::Psd | Projection::EnergyOnly | Projection::Gradient => {
             let block = pos_part2(&Mat2::new(k[0], k[1], k[1], k[2]));
             let mut d = Mat3::zeros();
             d.fixed_view_mut::<2, 2>(0, 0).copy_from(&block);
@@ -327,6 +330,9 @@ pub fn measured_bending(
     let grad_theta = Vec12::from_fn(|r, _| g[r / 3].0[r % 3]);
     let c = 0.5 * ke * shape;
     let grad = c * d * grad_theta;
+    if proj == Projection::Gradient {
+        return (energy, grad, Mat12::zeros());
+    }
     let mut hess = c * grad_theta * grad_theta.transpose();
     if proj == Projection::Exact {
         hess += c * d * dihedral_hessian(x);

@@ -101,6 +101,9 @@ pub fn membrane(x: &[Vec3; 3], rest: &MembraneRest, k: &MembraneStiffness, proj:
     let jac = strain_jacobian(&f, &b);
     let sigma = Vec3::new(s1, s2, s3);
     let grad = a * jac.transpose() * sigma;
+    if proj == Projection::Gradient {
+        return (energy, grad, Mat9::zeros());
+    }
     let c = Mat3::new(k.k11, k.k12, 0.0, k.k12, k.k22, 0.0, 0.0, 0.0, k.k33);
     let mut hess = a * jac.transpose() * c * jac;
     // Geometric term (bᵢᵀ S bⱼ) I₃; its indefinite part comes from compressive stress, so the
@@ -108,7 +111,7 @@ pub fn membrane(x: &[Vec3; 3], rest: &MembraneRest, k: &MembraneStiffness, proj:
     let s = Mat2::new(s1, s3, s3, s2);
     let s = match proj {
         Projection::Exact => s,
-        Projection::Psd | Projection::EnergyOnly => pos_part2(&s),
+        Projection::Psd | Projection::EnergyOnly | Projection::Gradient => pos_part2(&s),
     };
     for i in 0..3 {
         for j in 0..3 {

@@ -198,7 +198,8 @@ impl Simulation {
                 contacts: &contacts,
                 fixed: &fixed,
             };
-            self.ws.system.assemble_static(&input, mu, &rhs);
+            // Steps on the first step's factor need the right-hand side alone.
+            self.ws.system.assemble_static(&input, mu, &rhs, refactor);
             let dx = self
                 .ws
                 .system

@@ -12,7 +12,7 @@ use crate::forces::handle::{anchor_spring, glue_spring, Spring};
 use crate::forces::material::Material;
 use crate::forces::wind::{wind_face, Wind};
 use crate::forces::{Projection, RestState};
-use crate::math::{Mat12, Mat3, Real, Vec12, Vec3, Vec9};
+use crate::math::{Mat12, Mat3, Mat9, Real, Vec12, Vec3, Vec9};
 use crate::mesh::Mesh;
 
 use super::pattern::NONE;
@@ -77,18 +77,21 @@ struct Local<const N: usize, const M: usize> {
     mat: nalgebra::SMatrix<Real, M, M>,
 }
 
-fn face_local(inp: &StepInput, scheme: Scheme, f: usize) -> Local<3, 9> {
+fn face_local(inp: &StepInput, scheme: Scheme, proj: Projection, f: usize) -> Local<3, 9> {
     let mesh = inp.mesh;
     let ids = mesh.face_nodes(f);
     let x = ids.map(|n| mesh.nodes[n].x);
     let v = ids.map(|n| scheme.velocity(inp, n));
     let m = &inp.materials[mesh.faces[f].material as usize];
     let (h, damping) = scheme.h_and_damping(inp, m.damping);
-    let (energy, grad, hess) = m.stretch(&x, &inp.rest.membrane[f], Projection::Psd);
+    let (energy, grad, hess) = m.stretch(&x, &inp.rest.membrane[f], proj);
     let vl = Vec9::from_fn(|r, _| v[r / 3][r % 3]);
-    // b = h(f − (α + h) K v), A = (hα + h²) K.
-    let mut rhs = -h * grad - h * (damping + h) * (hess * vl);
-    let mut mat = (h * damping + h * h) * hess;
+    // b = h(f − (α + h) K v), A = (hα + h²) K; the gradient alone when no matrix is wanted
+    // (`Scheme::Static` has v = 0, so b is the same).
+    let (mut rhs, mut mat) = match proj {
+        Projection::Gradient => (-h * grad, Mat9::zeros()),
+        _ => (-h * grad - h * (damping + h) * (hess * vl), (h * damping + h * h) * hess),
+    };
     if let Some(w) = inp.wind.filter(|_| scheme == Scheme::Step) {
         let (fw, dfdv) = wind_face(&x, &v, w);
         for i in 0..3 {
@@ -104,20 +107,24 @@ fn face_local(inp: &StepInput, scheme: Scheme, f: usize) -> Local<3, 9> {
     Local { energy, rhs, mat }
 }
 
-fn hinge_local(inp: &StepInput, scheme: Scheme, k: usize) -> Local<4, 12> {
+fn hinge_local(inp: &StepInput, scheme: Scheme, proj: Projection, k: usize) -> Local<4, 12> {
     let hinge = &inp.rest.hinges[k];
     let x = hinge.nodes.map(|n| inp.mesh.nodes[n].x);
     let m = &inp.materials[hinge.material];
     let (h, damping) = scheme.h_and_damping(inp, m.damping);
-    let (energy, grad, hess) = m.bend(&x, hinge, Projection::Psd);
+    let (energy, grad, hess) = m.bend(&x, hinge, proj);
+    if proj == Projection::Gradient {
+        return Local { energy, rhs: -h * grad, mat: Mat12::zeros() };
+    }
     let vl = Vec12::from_fn(|r, _| scheme.velocity(inp, hinge.nodes[r / 3])[r % 3]);
     let rhs = -h * grad - h * (damping + h) * (hess * vl);
     let mat: Mat12 = (h * damping + h * h) * hess;
     Local { energy, rhs, mat }
 }
 
+/// Adds a local right-hand side, and with `blocks` its matrix, into the system.
 fn scatter<const N: usize, const M: usize>(
-    blocks: &mut [Mat3],
+    blocks: Option<&mut [Mat3]>,
     rhs: &mut [Vec3],
     nodes: &[usize; N],
     slots: &[usize],
@@ -125,6 +132,9 @@ fn scatter<const N: usize, const M: usize>(
 ) {
     for i in 0..N {
         rhs[nodes[i]] += local.rhs.fixed_rows::<3>(3 * i);
+    }
+    let Some(blocks) = blocks else { return };
+    for i in 0..N {
         for j in 0..N {
             let s = slots[i * N + j];
             if s != NONE {
@@ -139,7 +149,7 @@ impl ImplicitSystem {
     /// repulsion); returns the elastic energy at the start of the step. `solve` adds the friction
     /// terms and the pinned nodes.
     pub fn assemble(&mut self, inp: &StepInput) -> Real {
-        let energy = self.assemble_base(inp, Scheme::Step);
+        let energy = self.assemble_base(inp, Scheme::Step, true);
         self.base_saved = false;
         energy
     }
@@ -147,11 +157,14 @@ impl ImplicitSystem {
     /// Assembles the static Newton system of the potential E (elastic, repulsion, springs) at
     /// the mesh's positions, plus `mu` I, with `rhs` added to −∇E (`Scheme::Static`); returns
     /// the elastic energy. `solve` (no terms) then gives the position change, pinned nodes
-    /// held where `inp.pinned` is their current velocity.
-    pub fn assemble_static(&mut self, inp: &StepInput, mu: Real, rhs: &[Vec3]) -> Real {
-        let energy = self.assemble_base(inp, Scheme::Static);
+    /// held where `inp.pinned` is their current velocity. Without `matrix` only the right-hand
+    /// side is assembled (the same bits), for a solve with the factor of an earlier matrix.
+    pub fn assemble_static(&mut self, inp: &StepInput, mu: Real, rhs: &[Vec3], matrix: bool) -> Real {
+        let energy = self.assemble_base(inp, Scheme::Static, matrix);
         for (b, r) in rhs.iter().enumerate().take(self.pattern.nodes) {
-            self.blocks[self.pattern.col_start[b]] += Mat3::identity() * mu;
+            if matrix {
+                self.blocks[self.pattern.col_start[b]] += Mat3::identity() * mu;
+            }
             self.rhs[b] += r;
         }
         self.base_saved = false;
@@ -212,16 +225,20 @@ impl ImplicitSystem {
         Ok(dv)
     }
 
-    /// Fills `blocks` and `rhs`; returns the elastic energy.
-    fn assemble_base(&mut self, inp: &StepInput, scheme: Scheme) -> Real {
+    /// Fills `rhs` and, with `matrix`, `blocks` (left as they were otherwise); returns the
+    /// elastic energy.
+    fn assemble_base(&mut self, inp: &StepInput, scheme: Scheme, matrix: bool) -> Real {
         let mesh = inp.mesh;
-        self.blocks.iter_mut().for_each(|b| *b = Mat3::zeros());
+        let proj = if matrix { Projection::Psd } else { Projection::Gradient };
+        if matrix {
+            self.blocks.iter_mut().for_each(|b| *b = Mat3::zeros());
+        }
         self.rhs.iter_mut().for_each(|r| *r = Vec3::zeros());
         if scheme == Scheme::Step {
             for (r, n) in self.rhs.iter_mut().zip(&mesh.nodes) {
                 *r = inp.h * n.mass * inp.gravity;
             }
-            for b in 0..self.pattern.nodes {
+            for b in (0..self.pattern.nodes).filter(|_| matrix) {
                 // The diagonal block is first in its column.
                 self.blocks[self.pattern.col_start[b]] += Mat3::identity() * mesh.nodes[b].mass;
             }
@@ -232,12 +249,13 @@ impl ImplicitSystem {
             let locals: Vec<Local<3, 9>> = (start..(start + CHUNK).min(nf))
                 .into_par_iter()
                 .with_min_len(PAR_GRAIN)
-                .map(|f| face_local(inp, scheme, f))
+                .map(|f| face_local(inp, scheme, proj, f))
                 .collect();
             for (k, local) in locals.iter().enumerate() {
                 let f = start + k;
                 energy += local.energy;
-                scatter(&mut self.blocks, &mut self.rhs, &mesh.face_nodes(f), &self.pattern.face_slots[f], local);
+                let blocks = matrix.then_some(self.blocks.as_mut_slice());
+                scatter(blocks, &mut self.rhs, &mesh.face_nodes(f), &self.pattern.face_slots[f], local);
             }
         }
         let nh = inp.rest.hinges.len();
@@ -245,13 +263,13 @@ impl ImplicitSystem {
             let locals: Vec<Local<4, 12>> = (start..(start + CHUNK).min(nh))
                 .into_par_iter()
                 .with_min_len(PAR_GRAIN)
-                .map(|k| hinge_local(inp, scheme, k))
+                .map(|k| hinge_local(inp, scheme, proj, k))
                 .collect();
             for (j, local) in locals.iter().enumerate() {
                 let k = start + j;
                 energy += local.energy;
                 scatter(
-                    &mut self.blocks,
+                    matrix.then_some(self.blocks.as_mut_slice()),
                     &mut self.rhs,
                     &inp.rest.hinges[k].nodes,
                     &self.pattern.hinge_slots[k],
@@ -259,14 +277,14 @@ impl ImplicitSystem {
                 );
             }
         }
-        self.add_contacts(inp, scheme);
-        self.add_springs(inp, scheme);
+        self.add_contacts(inp, scheme, matrix);
+        self.add_springs(inp, scheme, matrix);
         energy
     }
 
     /// Soft handles enter like elastic elements without damping (ARCSim's
-    /// `add_constraint_forces`): A += h² ∇²E, b += −h (∇E + h ∇²E v).
-    fn add_springs(&mut self, inp: &StepInput, scheme: Scheme) {
+    /// `add_constraint_forces`): A += h² ∇²E (with `matrix`), b += −h (∇E + h ∇²E v).
+    fn add_springs(&mut self, inp: &StepInput, scheme: Scheme, matrix: bool) {
         let (h, _) = scheme.h_and_damping(inp, 0.0);
         let nodes = &inp.mesh.nodes;
         for spring in inp.springs {
@@ -274,7 +292,9 @@ impl ImplicitSystem {
                 Spring::Anchor { node, target, k } => {
                     let (_, grad, hess) = anchor_spring(&nodes[node].x, &target, k);
                     self.rhs[node] -= h * (grad + h * (hess * scheme.velocity(inp, node)));
-                    self.blocks[self.pattern.col_start[node]] += h * h * hess;
+                    if matrix {
+                        self.blocks[self.pattern.col_start[node]] += h * h * hess;
+                    }
                 }
                 Spring::Glue { nodes: [a, b], k } => {
                     let (_, grad, hess) = glue_spring(&nodes[a].x, &nodes[b].x, k);
@@ -284,6 +304,9 @@ impl ImplicitSystem {
                     let rhs = -h * (grad + h * (hess * vl));
                     self.rhs[a] += rhs.fixed_rows::<3>(0);
                     self.rhs[b] += rhs.fixed_rows::<3>(3);
+                    if !matrix {
+                        continue;
+                    }
                     let kk = h * h * k * Mat3::identity();
                     // The pair's coupling is in the pattern (`SimState::extra_pairs` holds glue
                     // pairs); were it missing, 2 k I on each diagonal majorizes the spring, as
@@ -304,7 +327,8 @@ impl ImplicitSystem {
     }
 
     /// Repulsion contacts enter like elastic elements (without damping):
-    /// A += h² K_c, b += h (−∇E_c − h K_c v) over the cloth nodes; fixed points are constant.
+    /// A += h² K_c (with `matrix`), b += h (−∇E_c − h K_c v) over the cloth nodes; fixed points
+    /// are constant.
     /// Only the pop filter's static solve passes contacts here; the implicit step passes none
     /// and adds its contacts through their active set (`collision::speculative`), so that a
     /// contact the step carries out of the thickness lets go.
@@ -315,7 +339,7 @@ impl ImplicitSystem {
     /// a majorizer: K_c = k (w wᵀ) ⊗ (n nᵀ) and, for the m cloth nodes of the contact,
     /// (Σᵢ wᵢ xᵢ·n)² ≤ m Σᵢ wᵢ² (xᵢ·n)² (Cauchy–Schwarz), so m · blockdiag(K_c) ⪰ K_c: the
     /// system stays SPD and the step is at least as stiff as with the full block.
-    fn add_contacts(&mut self, inp: &StepInput, scheme: Scheme) {
+    fn add_contacts(&mut self, inp: &StepInput, scheme: Scheme, matrix: bool) {
         let n = inp.mesh.nodes.len();
         let (h, _) = scheme.h_and_damping(inp, 0.0);
         for c in inp.contacts {
@@ -342,6 +366,9 @@ impl ImplicitSystem {
                     continue;
                 }
                 self.rhs[i] += rhs.fixed_rows::<3>(3 * a);
+                if !matrix {
+                    continue;
+                }
                 if !complete {
                     let diag = self.pattern.col_start[i]; // first in its column
                     self.blocks[diag] += (cloth * h * h) * hess.fixed_view::<3, 3>(3 * a, 3 * a);
