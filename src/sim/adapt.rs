@@ -107,7 +107,8 @@ impl Simulation {
             }
             (x, tris)
         };
-        let mut views = face_views(&self.state.mesh, camera, self.state.time, dt, &params, &obstacles_at);
+        let kept = &mut self.ws.obstacle_depths;
+        let mut views = face_views(&self.state.mesh, camera, self.state.time, dt, &params, &obstacles_at, kept);
         // Smoothed coarsening: μ falls by at most Δt / T_c per remesh (`view_memory`).
         let drop: Vec<Real> = params
             .iter()

@@ -12,6 +12,7 @@ use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
 use crate::remesh::RemeshStats;
 use crate::scene::Scene;
+use crate::sizing::view::ObstacleDepths;
 use crate::sizing::FaceView;
 use crate::solver::pattern::BlockPattern;
 use crate::solver::ImplicitSystem;
@@ -57,6 +58,9 @@ pub struct Workspace {
     /// they were computed for: the frame end's stats and the next frame's remesh see the same
     /// state, so the second reuses the first.
     pub views: Option<(u64, Vec<Option<FaceView>>)>,
+    /// The obstacles' occlusion depth images of the last view factors, for the next
+    /// (`sizing::view::ObstacleDepths`).
+    pub(super) obstacle_depths: ObstacleDepths,
     /// Whether the untangling stage looks for cloth crossing itself at the next step: set at
     /// every frame start, kept while it finds crossings it can take back (`untangle.rs`).
     pub untangle_due: bool,
@@ -89,6 +93,7 @@ impl Workspace {
             trapped: Vec::new(),
             pinch_faces: None,
             views: None,
+            obstacle_depths: ObstacleDepths::default(),
             untangle_due: true,
         })
     }

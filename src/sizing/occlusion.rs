@@ -52,10 +52,21 @@ impl DepthMap {
     /// Rasterises `triangles` over `positions` seen by `view` into an image `height` pixels high
     /// (width from the view's aspect) and max-filters it.
     pub fn new(positions: &[Vec3], triangles: &[[usize; 3]], view: &View, height: usize) -> Self {
+        let (width, height) = Self::size(view, height);
+        Self::from_depth(view, width, height, &rasterize(positions, triangles, view, width, height).depth)
+    }
+
+    /// The image size (width, height) of a map `height` pixels high seen by `view`.
+    pub fn size(view: &View, height: usize) -> (usize, usize) {
         let height = height.max(1);
-        let width = ((height as Real) * view.aspect).round().max(1.0) as usize;
-        let image = rasterize(positions, triangles, view, width, height);
-        DepthMap { view: *view, width, height, depth: max_filter(&image.depth, width, height) }
+        (((height as Real) * view.aspect).round().max(1.0) as usize, height)
+    }
+
+    /// The map of a rasterised depth image (`metrics::rasterize`'s, of the size `size` gives),
+    /// max-filtered. The depth image of a union of triangle sets is the per-pixel minimum of
+    /// theirs (each triangle covers the same pixel centres alone as among others).
+    pub fn from_depth(view: &View, width: usize, height: usize, depth: &[Real]) -> Self {
+        DepthMap { view: *view, width, height, depth: max_filter(depth, width, height) }
     }
 
     /// Whether `p` is not hidden: outside the image, or not behind the filtered depth by more
@@ -152,6 +163,25 @@ mod tests {
         assert!(map.sees(&Vec3::new(1.5, 4.0, 0.0)), "behind, beside the wall");
         assert!(map.sees(&Vec3::new(0.0, -1.0, 0.0)), "behind the eye: out of the image");
         assert!(map.sees(&Vec3::new(50.0, 4.0, 0.0)), "outside the image");
+    }
+
+    #[test]
+    fn the_minimum_of_two_parts_images_is_the_image_of_both() {
+        // A wall in front of part of a far sheet, a pole crossing both, overlapping and
+        // sharing pixel edges: drawn apart and combined, the map is the one drawn together.
+        let parts = [square(2.0, 0.5, 0.1, 0.0), square(4.0, 1.5, -0.3, 0.2), square(3.0, 0.05, 0.0, -0.4)];
+        let (p, t) = merge(&parts);
+        let together = DepthMap::new(&p, &t, &view(), 64);
+        let (width, height) = DepthMap::size(&view(), 64);
+        let mut depth = vec![Real::INFINITY; width * height];
+        for (pp, tt) in &parts {
+            let image = rasterize(pp, tt, &view(), width, height);
+            depth.iter_mut().zip(&image.depth).for_each(|(d, e)| *d = d.min(*e));
+        }
+        let apart = DepthMap::from_depth(&view(), width, height, &depth);
+        assert_eq!((apart.width, apart.height), (together.width, together.height));
+        assert!(apart.depth.iter().zip(&together.depth).all(|(a, b)| a.to_bits() == b.to_bits()));
+        assert!(together.depth.iter().any(|d| d.is_finite()) && together.depth.iter().any(|d| d.is_infinite()));
     }
 
     #[test]

@@ -22,6 +22,7 @@ use crate::camera::{Camera, View};
 use crate::io::stats::ViewFrameStats;
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
+use crate::metrics::rasterize;
 
 use super::occlusion::{occluded_factor, DepthMap};
 
@@ -173,7 +174,7 @@ pub type Soup = (Vec<Vec3>, Vec<[usize; 3]>);
 /// seconds. `params[material]` holds the view parameters and minimum edge length of each
 /// view-dependent cloth; faces of other cloths get `None`. `obstacles_at(t)` gives the
 /// obstacles that can hide cloth at a camera time (with the whole cloth mesh, as it is now,
-/// they make the depth images of `occlusion`).
+/// they make the depth images of `occlusion`); `kept` holds the obstacle images between calls.
 pub fn face_views(
     mesh: &Mesh,
     camera: &Camera,
@@ -181,8 +182,9 @@ pub fn face_views(
     dt: Real,
     params: &[Option<(ViewParams, Real)>],
     obstacles_at: &dyn Fn(Real) -> Soup,
+    kept: &mut ObstacleDepths,
 ) -> Vec<Option<FaceView>> {
-    let depth_maps = DepthMaps::new(mesh, camera, t, dt, params, obstacles_at);
+    let depth_maps = DepthMaps::new(mesh, camera, (t, dt), params, obstacles_at, kept);
     let offsets: Vec<Vec<(Real, Real)>> =
         params.iter().map(|p| p.as_ref().map_or(Vec::new(), |(p, _)| lookahead(dt, p))).collect();
     let samples: Vec<Vec<(View, Real)>> =
@@ -190,9 +192,7 @@ pub fn face_views(
     let maps: Vec<Vec<Option<&DepthMap>>> = offsets
         .iter()
         .zip(params)
-        .map(|(o, p)| {
-            o.iter().map(|&(off, _)| depth_maps.get(off, dt, p.map_or(0, |(p, _)| p.occlusion_pixels))).collect()
-        })
+        .map(|(o, p)| o.iter().map(|&(off, _)| depth_maps.get(off, p.map_or(0, |(p, _)| p.occlusion_pixels))).collect())
         .collect();
     let now = camera.view_at(t);
     (0..mesh.faces.len())
@@ -229,24 +229,37 @@ pub fn face_views(
 }
 
 /// The depth images of every camera time a view-dependent cloth samples, one per distinct
-/// (time offset, resolution), built once per call.
+/// (time on the occlusion grid, resolution), built once per call.
 struct DepthMaps {
-    maps: Vec<((Real, usize), DepthMap)>,
+    t: Real,
+    step: Real,
+    maps: Vec<((i64, usize), DepthMap)>,
+}
+
+/// The obstacles' depth images kept from one remesh to the next (`face_views`): an obstacle
+/// image depends only on its grid time and resolution (the cloth's part, as it is now, is drawn
+/// at every remesh), and successive remeshes ask for mostly the same grid times. A resumed run
+/// starts with none and draws the same images.
+#[derive(Clone, Debug, Default)]
+pub struct ObstacleDepths {
+    /// (grid index, resolution, grid step's bits) and the raw depth image.
+    images: Vec<((i64, usize, u64), Vec<Real>)>,
 }
 
 impl DepthMaps {
     fn new(
         mesh: &Mesh,
         camera: &Camera,
-        t: Real,
-        dt: Real,
+        (t, dt): (Real, Real),
         params: &[Option<(ViewParams, Real)>],
         obstacles_at: &dyn Fn(Real) -> Soup,
+        kept: &mut ObstacleDepths,
     ) -> Self {
-        let mut keys: Vec<(Real, usize)> = Vec::new();
+        let step = OCCLUSION_STEP.max(dt);
+        let mut keys: Vec<(i64, usize)> = Vec::new();
         for (p, _) in params.iter().flatten().filter(|(p, _)| p.occlusion_pixels > 0) {
             for (off, _) in lookahead(dt, p) {
-                let key = (occlusion_time(off, dt), p.occlusion_pixels);
+                let key = (occlusion_index(t + off, step), p.occlusion_pixels);
                 if !keys.contains(&key) {
                     keys.push(key);
                 }
@@ -254,39 +267,50 @@ impl DepthMaps {
         }
         let cloth_tris: Vec<[usize; 3]> = (0..mesh.faces.len()).map(|f| mesh.face_nodes(f)).collect();
         let cloth_x = mesh.positions();
+        let mut images = Vec::with_capacity(keys.len());
         let maps = keys
             .into_iter()
-            .map(|(off, px)| {
-                let (mut x, mut tris) = (cloth_x.clone(), cloth_tris.clone());
-                let (ox, otris) = obstacles_at(t + off);
-                let base = x.len();
-                x.extend(ox);
-                tris.extend(otris.iter().map(|tri| tri.map(|i| i + base)));
-                ((off, px), DepthMap::new(&x, &tris, &camera.view_at(t + off), px))
+            .map(|(k, px)| {
+                let time = k as Real * step;
+                let view = camera.view_at(time);
+                let (width, height) = DepthMap::size(&view, px);
+                let id = (k, px, step.to_bits());
+                let obstacles = match kept.images.iter().position(|(key, _)| *key == id) {
+                    Some(i) => std::mem::take(&mut kept.images[i].1),
+                    None => {
+                        let (ox, otris) = obstacles_at(time);
+                        rasterize(&ox, &otris, &view, width, height).depth
+                    }
+                };
+                let cloth = rasterize(&cloth_x, &cloth_tris, &view, width, height).depth;
+                let depth: Vec<Real> = cloth.iter().zip(&obstacles).map(|(c, o)| c.min(*o)).collect();
+                images.push((id, obstacles));
+                ((k, px), DepthMap::from_depth(&view, width, height, &depth))
             })
             .collect();
-        DepthMaps { maps }
+        kept.images = images;
+        DepthMaps { t, step, maps }
     }
 
-    /// The depth image serving camera time `t + off` (the nearest of `occlusion_time`'s grid).
-    fn get(&self, off: Real, dt: Real, px: usize) -> Option<&DepthMap> {
+    /// The depth image serving camera time `t + off` (the nearest on the occlusion grid).
+    fn get(&self, off: Real, px: usize) -> Option<&DepthMap> {
         if px == 0 {
             return None;
         }
-        let key = (occlusion_time(off, dt), px);
+        let key = (occlusion_index(self.t + off, self.step), px);
         self.maps.iter().find(|(k, _)| *k == key).map(|(_, m)| m)
     }
 }
 
-/// Occlusion changes more slowly than the window is sampled: depth images are made every
-/// `OCCLUSION_STEP` seconds of the window (or every `dt` when that is longer), and each camera
-/// time uses the nearest one.
+/// Occlusion changes more slowly than the window is sampled: depth images are made at the
+/// multiples of `OCCLUSION_STEP` seconds (or of `dt` when that is longer) that the window
+/// reaches, and each camera time uses the nearest one. The grid is absolute, not relative to the
+/// remesh time, so the next remesh finds most of its obstacle images made (`ObstacleDepths`).
 const OCCLUSION_STEP: Real = 0.1;
 
-/// The time offset of the depth image that serves camera time offset `off`.
-fn occlusion_time(off: Real, dt: Real) -> Real {
-    let step = OCCLUSION_STEP.max(dt);
-    (off / step).round() * step
+/// The index on the occlusion grid of the image that serves camera time `time`.
+fn occlusion_index(time: Real, step: Real) -> i64 {
+    (time / step).round() as i64
 }
 
 /// Area-weighted mean μ′₃ over the faces with a view (`views` from `face_views`), how many of
@@ -318,6 +342,54 @@ pub fn view_summary(mesh: &Mesh, camera: &Camera, t: Real, views: &[Option<FaceV
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A 1 m sheet 3 m in front of a camera panning across it, half hidden behind a 2 m-wide
+    /// wall 1 m in front of it that slides sideways: the obstacle images kept from one remesh to
+    /// the next give the views a fresh start gives, while most of them are not drawn again.
+    #[test]
+    fn kept_obstacle_images_give_the_views_of_a_fresh_start() {
+        let camera = Camera::from_json(
+            r#"{ "version": 1, "aspect": 1.0, "keys": [
+                { "time": 0.0, "position": [0.5, -3, 0.5], "target": [0.5, 0, 0.5], "up": [0, 0, 1], "fov": 50 },
+                { "time": 1.0, "position": [1.5, -3, 0.5], "target": [1.0, 0, 0.5], "up": [0, 0, 1], "fov": 50 } ] }"#,
+            std::path::Path::new("camera.json"),
+        )
+        .unwrap();
+        let mut mesh = crate::mesh::rectangle(1.0, 1.0, 8, 8).unwrap();
+        for n in &mut mesh.nodes {
+            n.x = Vec3::new(n.x.x, 0.0, n.x.y);
+        }
+        let drawn = std::cell::Cell::new(0);
+        let wall = |t: Real| -> Soup {
+            drawn.set(drawn.get() + 1);
+            let (x0, x1) = (-1.5 + t, 0.5 + t);
+            let p = vec![
+                Vec3::new(x0, -1.0, -1.0),
+                Vec3::new(x1, -1.0, -1.0),
+                Vec3::new(x1, -1.0, 2.0),
+                Vec3::new(x0, -1.0, 2.0),
+            ];
+            (p, vec![[0, 1, 2], [0, 2, 3]])
+        };
+        let p = ViewParams { occlusion_pixels: 32, ..Default::default() };
+        let params = [Some((p, 0.01))];
+        let (dt, frames) = (0.04, 10);
+        let mut kept = ObstacleDepths::default();
+        let mut hidden = 0;
+        for frame in 0..frames {
+            let t = frame as Real * dt;
+            let before = drawn.get();
+            let fresh = face_views(&mesh, &camera, t, dt, &params, &wall, &mut ObstacleDepths::default());
+            let per_call = drawn.get() - before;
+            let views = face_views(&mesh, &camera, t, dt, &params, &wall, &mut kept);
+            assert_eq!(views, fresh, "frame {frame}");
+            if frame > 0 {
+                assert!(drawn.get() - before - per_call < per_call, "frame {frame}: kept images drawn again");
+            }
+            hidden += views.iter().flatten().filter(|v| v.visible < 1.0).count();
+        }
+        assert!(hidden > 0, "the wall hides part of the sheet");
+    }
 
     #[test]
     fn scaled_cosine_gives_a_fifth_of_its_range_to_back_faces() {
