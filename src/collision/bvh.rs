@@ -158,8 +158,9 @@ impl Bvh {
         }
     }
 
-    /// Calls `f(primitive)` for every primitive whose box overlaps `q`.
-    pub fn query(&self, q: &Aabb, boxes: &[Aabb], mut f: impl FnMut(usize)) {
+    /// Calls `f(primitive)` for every primitive whose box (as last built or refitted) overlaps
+    /// `q`.
+    pub fn query(&self, q: &Aabb, mut f: impl FnMut(usize)) {
         if self.nodes.is_empty() {
             return;
         }
@@ -170,8 +171,9 @@ impl Bvh {
                 continue;
             }
             if n.count > 0 {
-                for &p in &self.order[n.start as usize..(n.start + n.count) as usize] {
-                    if boxes[p as usize].overlaps(q) {
+                let range = n.start as usize..(n.start + n.count) as usize;
+                for (&p, b) in self.order[range.clone()].iter().zip(&self.leaf_boxes[range]) {
+                    if b.overlaps(q) {
                         f(p as usize);
                     }
                 }
@@ -452,7 +454,7 @@ mod tests {
         let want: Vec<_> = brute(&moved, &moved).into_iter().filter(|(i, j)| i < j).collect();
         assert_eq!(selfp, want);
         let mut hits = Vec::new();
-        ta.query(&b[0], &moved, |p| hits.push(p));
+        ta.query(&b[0], |p| hits.push(p));
         hits.sort_unstable();
         let want: Vec<_> = (0..moved.len()).filter(|&i| moved[i].overlaps(&b[0])).collect();
         assert_eq!(hits, want);

@@ -59,9 +59,9 @@ struct Patch<'a> {
     x: &'a [Vec3],
     tris: &'a [[usize; 3]],
     faces: Vec<usize>,
-    /// Per patch face: its unit normal and its box grown by twice the thickness.
+    /// Per patch face: its unit normal.
     normals: Vec<Vec3>,
-    boxes: Vec<Aabb>,
+    /// Over the patch faces' boxes grown by twice the thickness.
     tree: Bvh,
 }
 
@@ -76,7 +76,7 @@ impl<'a> Patch<'a> {
             })
             .collect();
         let boxes: Vec<Aabb> = faces.iter().map(|&f| Aabb::from_points(&corners(f)).inflate(grow)).collect();
-        Patch { body, x, tris, normals, tree: Bvh::build(&boxes), boxes, faces }
+        Patch { body, x, tris, normals, tree: Bvh::build(&boxes), faces }
     }
 
     /// The closest point to `p` on the patch's faces whose grown boxes hold `p` (ties: the first
@@ -86,7 +86,7 @@ impl<'a> Patch<'a> {
     /// with its bottom face), so there the distance counts as outside.
     fn closest(&self, p: &Vec3) -> Option<SdfHit> {
         let mut best: Option<SdfHit> = None;
-        self.tree.query(&Aabb { min: *p, max: *p }, &self.boxes, |k| {
+        self.tree.query(&Aabb { min: *p, max: *p }, |k| {
             let f = self.faces[k];
             let [a, b, c] = self.tris[f].map(|i| &self.x[i]);
             let cp = closest_point_triangle(p, a, b, c);
@@ -209,7 +209,7 @@ pub(super) fn bands<'a>(
     let cloth_tree = Bvh::build(&cloth_boxes);
     let near_cloth = |bx: &Aabb| {
         let mut hit = false;
-        cloth_tree.query(&bx.inflate(reach + th), &cloth_boxes, |_| hit = true);
+        cloth_tree.query(&bx.inflate(reach + th), |_| hit = true);
         hit
     };
     // The box of some faces of a body at positions x.
@@ -276,7 +276,7 @@ fn facing_pairs(
     let (mut side_a, mut side_b) = (Vec::new(), Vec::new());
     for k in 0..fa.len() {
         let mut found = false;
-        tree_b.query(&ba[k].inflate(reach), bb, |j| {
+        tree_b.query(&ba[k].inflate(reach), |j| {
             if na[k].dot(&nb[j]) < facing {
                 found = true;
                 side_b.push(fb[j]);
