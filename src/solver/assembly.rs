@@ -229,6 +229,8 @@ impl ImplicitSystem {
     /// elastic energy.
     fn assemble_base(&mut self, inp: &StepInput, scheme: Scheme, matrix: bool) -> Real {
         let mesh = inp.mesh;
+        // The right-hand side alone equals the full one's only without velocities.
+        debug_assert!(matrix || scheme == Scheme::Static, "a right-hand side alone is for the static system");
         let proj = if matrix { Projection::Psd } else { Projection::Gradient };
         if matrix {
             self.blocks.iter_mut().for_each(|b| *b = Mat3::zeros());
