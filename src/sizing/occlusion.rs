@@ -22,7 +22,6 @@
 
 use crate::camera::View;
 use crate::math::{Real, Vec3};
-use crate::metrics::rasterize;
 
 /// Depth (m) behind the nearest surface within which a point counts as seen.
 pub const SEEN_WITHIN: Real = 0.01;
@@ -50,10 +49,18 @@ pub struct DepthMap {
 
 impl DepthMap {
     /// Rasterises `triangles` over `positions` seen by `view` into an image `height` pixels high
-    /// (width from the view's aspect) and max-filters it.
+    /// (width from the view's aspect) and max-filters it: everything drawn together, the
+    /// reference the tests hold `from_depth`'s per-part images to (the view factors combine a
+    /// kept obstacle image with the cloth's, `sizing::view`).
+    #[cfg(test)]
     pub fn new(positions: &[Vec3], triangles: &[[usize; 3]], view: &View, height: usize) -> Self {
         let (width, height) = Self::size(view, height);
-        Self::from_depth(view, width, height, &rasterize(positions, triangles, view, width, height).depth)
+        Self::from_depth(
+            view,
+            width,
+            height,
+            &crate::metrics::rasterize(positions, triangles, view, width, height).depth,
+        )
     }
 
     /// The image size (width, height) of a map `height` pixels high seen by `view`.
@@ -125,6 +132,7 @@ pub fn occluded_factor(mu2: Real, visible: Real, mu_out: Real) -> Real {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::metrics::rasterize;
 
     /// Eye at the origin looking along +y, z up, 90° vertical fov, square image.
     fn view() -> View {
