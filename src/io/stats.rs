@@ -74,6 +74,13 @@ pub struct ViewFrameStats {
     /// than half of their sample points seen (`sizing::occlusion`); 0 when occlusion is off.
     #[serde(default)]
     pub view_faces_occluded: usize,
+    /// How far the frame's remesh moved the visible cloth on screen (`sizing::remesh_jump`): the
+    /// largest jump of a material point seen before it, and the 99th percentile, in pixels of
+    /// an image `image_height` high; 0 when nothing was remeshed.
+    #[serde(default)]
+    pub view_remesh_jump_px: f64,
+    #[serde(default)]
+    pub view_remesh_jump_p99_px: f64,
 }
 
 /// Long range attachments at the frame end (`constraints::lra`).

@@ -49,7 +49,11 @@ fn nearest(t: &[Vec2; 3], p: &Vec2) -> ([Real; 3], Real) {
 
 impl Locator {
     pub fn new(obj: &ObjData) -> Locator {
-        let uv: Vec<[Vec2; 3]> = obj.triangles.iter().map(|t| t.map(|c| obj.texcoords[c.vt.unwrap_or(0)])).collect();
+        Locator::from_triangles(obj.triangles.iter().map(|t| t.map(|c| obj.texcoords[c.vt.unwrap_or(0)])).collect())
+    }
+
+    /// A locator over material-space triangles (`Hit::triangle` indexes `uv`); at least one.
+    pub fn from_triangles(uv: Vec<[Vec2; 3]>) -> Locator {
         let (mut lo, mut hi) = (Vec2::repeat(Real::INFINITY), Vec2::repeat(Real::NEG_INFINITY));
         for p in uv.iter().flatten() {
             lo = lo.inf(p);

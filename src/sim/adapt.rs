@@ -7,10 +7,12 @@ use std::time::Instant;
 use crate::forces::buckling::compensation;
 use crate::io::stats::ViewFrameStats;
 use crate::math::{Mat2, Real};
+use crate::mesh::Mesh;
 use crate::remesh::rest_shape::{edge_angles_from_shapes, face_shape, face_shapes};
 use crate::remesh::{remesh, Finished, RemeshLimits, RemeshStats};
 use crate::scene::RemeshMode;
 use crate::sizing::view::{face_views, view_summary};
+use crate::sizing::remesh_jump::{remesh_jump, Jump};
 use crate::sizing::view_memory;
 use crate::sizing::{face_metrics, vertex_metrics, FaceView, ObstaclePlane, SizingParams};
 
@@ -143,11 +145,29 @@ impl Simulation {
     }
 
     /// The view-dependent cloths' view at the frame end, for stats.json (`None` outside view
-    /// mode).
+    /// mode), with the on-screen jump of the frame's remeshes.
     pub(super) fn view_stats(&mut self) -> Option<ViewFrameStats> {
         let views = self.face_views();
+        let jump = self.ws.remesh_jump.take().unwrap_or_default();
         let camera = self.scene.camera.as_ref()?;
-        (!views.is_empty()).then(|| view_summary(&self.state.mesh, camera, self.state.time, &views))
+        let mut stats = (!views.is_empty()).then(|| view_summary(&self.state.mesh, camera, self.state.time, &views))?;
+        (stats.view_remesh_jump_px, stats.view_remesh_jump_p99_px) = (jump.max_px, jump.p99_px);
+        Some(stats)
+    }
+
+    /// How far the remesh from `before` (seen as `views` say) moved the view-dependent cloth on
+    /// screen, seen by the camera now in an image of the cloths' `image_height`
+    /// (`sizing::remesh_jump`).
+    fn screen_jump(&self, before: &Mesh, views: &[Option<FaceView>]) -> Jump {
+        let Some(camera) = &self.scene.camera else { return Jump::default() };
+        let height = self
+            .scene
+            .cloths
+            .iter()
+            .filter_map(|c| c.remesh.as_ref().filter(|r| r.mode == RemeshMode::View))
+            .map(|r| r.view.image_height)
+            .fold(0.0, Real::max);
+        remesh_jump(before, views, &self.state.mesh, &camera.view_at(self.state.time), height)
     }
 
     /// Remeshes the cloths in `mode` to their sizing field (for `Uniform`: once, to the
@@ -193,6 +213,8 @@ impl Simulation {
             true => view_memory::carry(&memory, &finished.node_map, &finished.mesh),
             false => memory,
         };
+        // The mesh the camera saw just before, to measure how far the remesh moves it on screen.
+        let before = (changed && !views.is_empty()).then(|| self.state.mesh.clone());
         if changed {
             self.adopt(finished)?;
         }
@@ -212,6 +234,12 @@ impl Simulation {
                 tally.iterations += pop.iterations;
                 tally.max_move = tally.max_move.max(pop.max_move);
             }
+        }
+        if let Some(before) = before {
+            let jump = self.screen_jump(&before, &views);
+            let kept = self.ws.remesh_jump.get_or_insert_with(Jump::default);
+            (kept.max_px, kept.p99_px) = (kept.max_px.max(jump.max_px), kept.p99_px.max(jump.p99_px));
+            kept.points += jump.points;
         }
         Ok(stats)
     }

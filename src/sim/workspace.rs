@@ -10,6 +10,7 @@ use crate::forces::material::Material;
 use crate::forces::RestState;
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
+use crate::sizing::remesh_jump::Jump;
 use crate::remesh::RemeshStats;
 use crate::scene::Scene;
 use crate::sizing::view::ObstacleDepths;
@@ -61,6 +62,9 @@ pub struct Workspace {
     /// The obstacles' occlusion depth images of the last view factors, for the next
     /// (`sizing::view::ObstacleDepths`).
     pub(super) obstacle_depths: ObstacleDepths,
+    /// The on-screen jump of the remeshes since the last frame's stats (`sizing::remesh_jump`;
+    /// largest of each figure), in view mode.
+    pub(super) remesh_jump: Option<Jump>,
     /// Whether the untangling stage looks for cloth crossing itself at the next step: set at
     /// every frame start, kept while it finds crossings it can take back (`untangle.rs`).
     pub untangle_due: bool,
@@ -94,6 +98,7 @@ impl Workspace {
             pinch_faces: None,
             views: None,
             obstacle_depths: ObstacleDepths::default(),
+            remesh_jump: None,
             untangle_due: true,
         })
     }

@@ -5,6 +5,7 @@
 //! minimum aspect ratio (eqs. 2–6 and §3.4; formulas as in DESIGN.md "Sizing field").
 
 pub mod occlusion;
+pub mod remesh_jump;
 pub mod tensor_max;
 pub mod view;
 pub mod view_memory;
