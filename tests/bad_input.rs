@@ -346,6 +346,13 @@ fn cases() -> Vec<Case> {
             "(0, 10000]",
         ),
         json(
+            "max_jump_pixels_negative",
+            rect.replace("\"material\"", &format!("{REMESH},\n      \"material\""))
+                .replace("\"aspect_min\": 0.2", "\"aspect_min\": 0.2, \"view\": { \"max_jump_pixels\": -0.5 }"),
+            Loc::Field("cloths[0].remesh.view.max_jump_pixels"),
+            "[0, 10000]",
+        ),
+        json(
             "size_min_above_max",
             rect.replace("\"material\"", &format!("{REMESH},\n      \"material\"")).replace("[0.01, 0.2]", "[0.2, 0.01]"),
             Loc::Field("cloths[0].remesh.size"),

@@ -7,6 +7,7 @@
 //! and no flip or collapse makes the cloth cross itself (`guard`).
 
 pub mod guard;
+pub mod jump;
 pub mod ops;
 pub mod rest_shape;
 pub mod work;
@@ -60,7 +61,30 @@ pub fn remesh(
     rest_x: &[Vec3],
     limits: &RemeshLimits,
 ) -> Result<(Finished, RemeshStats), MeshError> {
+    remesh_within(mesh, vsize, pinned, groups, shapes, damage, rest_x, limits, &[])
+}
+
+/// `remesh`, where no flip or collapse may move a point of the surface near node n farther than
+/// `jump[n]` (m; per node of `mesh`, empty for no bound): the view mode's bound of one pixel on
+/// screen for the cloth the camera sees (`jump.rs`; nodes a split creates take the smaller bound
+/// of the edge's ends).
+#[allow(clippy::too_many_arguments)]
+pub fn remesh_within(
+    mesh: &Mesh,
+    vsize: Vec<Mat2>,
+    pinned: Vec<bool>,
+    groups: &[u32],
+    shapes: &[Mat2],
+    damage: &[Real],
+    rest_x: &[Vec3],
+    limits: &RemeshLimits,
+    jump: &[Real],
+) -> Result<(Finished, RemeshStats), MeshError> {
     let mut w = Work::new(mesh, vsize, pinned, shapes, damage, rest_x);
+    if !jump.is_empty() {
+        w.jump = jump.to_vec();
+        w.start = Some(jump::Start::new(&w));
+    }
     if !groups.is_empty() {
         w.group = groups.to_vec();
     }
@@ -76,7 +100,7 @@ pub fn remesh(
 
 /// Applies a flip or collapse unless it would push cloth through cloth (`guard`).
 fn apply_guarded(w: &mut Work, guard: &mut Guard, op: &ops::Op) -> bool {
-    if guard.crosses(w, op) {
+    if w.start.as_ref().is_some_and(|s| jump::too_far(w, s, op)) || guard.crosses(w, op) {
         return false;
     }
     for f in op.apply(w) {

@@ -31,6 +31,11 @@ impl Op {
         for &n in &self.new_nodes {
             w.add_node(n);
         }
+        if !w.jump.is_empty() {
+            // A node on a split edge takes the smaller bound of its ends.
+            let bound = self.split_nodes.map_or(Real::INFINITY, |(a, b)| w.jump[a].min(w.jump[b]));
+            w.jump.resize(w.x.len(), bound);
+        }
         if let Some((a, b)) = self.split_nodes {
             w.split_crease(a, b, first_node);
         }
@@ -51,7 +56,7 @@ impl Op {
     }
 
     /// Material coordinate of a vert of this op (existing or new).
-    fn u(&self, w: &Work, v: usize) -> Vec2 {
+    pub fn u(&self, w: &Work, v: usize) -> Vec2 {
         if v < w.u.len() {
             w.u[v]
         } else {

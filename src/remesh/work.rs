@@ -29,6 +29,11 @@ pub struct Work {
     pub vfaces: Vec<Vec<usize>>,
     /// Alive verts on each node (two or more on a seam).
     pub nverts: Vec<Vec<usize>>,
+    /// Per node, how far a flip or collapse may move the surface near it (m; `jump.rs`);
+    /// empty for no bound.
+    pub jump: Vec<Real>,
+    /// The surface the remesh started from, when `jump` bounds the moves.
+    pub start: Option<super::jump::Start>,
     /// Each node's neighbours along creases (`Mesh::creases`; empty off them).
     pub ncrease: Vec<Vec<usize>>,
 }
@@ -122,6 +127,8 @@ impl Work {
             faces,
             vfaces,
             nverts,
+            jump: Vec::new(),
+            start: None,
             ncrease,
         }
     }

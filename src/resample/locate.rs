@@ -12,6 +12,7 @@ pub struct Hit {
     pub outside: Real,
 }
 
+#[derive(Clone, Debug)]
 pub struct Locator {
     uv: Vec<[Vec2; 3]>,
     lo: Vec2,
@@ -75,6 +76,21 @@ impl Locator {
             }
         }
         Locator { uv, lo, cell, nx, ny, cells }
+    }
+
+    /// The triangles whose boxes may overlap the box `lo`–`hi` (those in the grid cells it
+    /// covers), each once, in increasing order.
+    pub fn near_box(&self, lo: &Vec2, hi: &Vec2) -> Vec<usize> {
+        let index = |v: Real, lo: Real, n: usize| (((v - lo) / self.cell).max(0.0) as usize).min(n - 1);
+        let mut out = Vec::new();
+        for j in index(lo.y, self.lo.y, self.ny)..=index(hi.y, self.lo.y, self.ny) {
+            for i in index(lo.x, self.lo.x, self.nx)..=index(hi.x, self.lo.x, self.nx) {
+                out.extend_from_slice(&self.cells[j * self.nx + i]);
+            }
+        }
+        out.sort_unstable();
+        out.dedup();
+        out
     }
 
     /// The face holding `p` (the lowest-numbered one on a shared edge), else the nearest face.

@@ -253,6 +253,8 @@ pub struct ViewSpec {
     pub buckling_compensation: Option<bool>,
     #[serde(default)]
     pub occlusion_pixels: Option<i64>,
+    #[serde(default)]
+    pub max_jump_pixels: Option<f64>,
 }
 
 #[derive(Deserialize, Debug, Clone)]

@@ -9,10 +9,10 @@ use crate::io::stats::ViewFrameStats;
 use crate::math::{Mat2, Real};
 use crate::mesh::Mesh;
 use crate::remesh::rest_shape::{edge_angles_from_shapes, face_shape, face_shapes};
-use crate::remesh::{remesh, Finished, RemeshLimits, RemeshStats};
+use crate::remesh::{remesh_within, Finished, RemeshLimits, RemeshStats};
 use crate::scene::RemeshMode;
+use crate::sizing::remesh_jump::{pixel_world_size, remesh_jump, Jump};
 use crate::sizing::view::{face_views, view_summary};
-use crate::sizing::remesh_jump::{remesh_jump, Jump};
 use crate::sizing::view_memory;
 use crate::sizing::{face_metrics, vertex_metrics, FaceView, ObstaclePlane, SizingParams};
 
@@ -155,18 +155,55 @@ impl Simulation {
         Some(stats)
     }
 
+    /// Per node, how far a flip or collapse may move the cloth near it (m): the world size of
+    /// its cloth's `max_jump_pixels` at the node's depth, for a node of a face the camera sees
+    /// now (`FaceView::visible` ≥ ½) that is in frame; unbounded elsewhere. Empty outside view
+    /// mode or when no cloth bounds the jump.
+    fn jump_bounds(&self, views: &[Option<FaceView>]) -> Vec<Real> {
+        let Some(camera) = &self.scene.camera else { return Vec::new() };
+        let mut pixels = vec![0.0; self.scene.materials.len()];
+        for c in &self.scene.cloths {
+            if let Some(r) = c.remesh.as_ref().filter(|r| r.mode == RemeshMode::View) {
+                pixels[c.material] = r.view.max_jump_pixels;
+            }
+        }
+        if views.is_empty() || pixels.iter().all(|&p| p == 0.0) {
+            return Vec::new();
+        }
+        let height = self.view_image_height();
+        let view = camera.view_at(self.state.time);
+        let mesh = &self.state.mesh;
+        let mut bound = vec![Real::INFINITY; mesh.nodes.len()];
+        for (f, v) in views.iter().enumerate() {
+            let px = pixels.get(mesh.faces[f].material as usize).copied().unwrap_or(0.0);
+            if px == 0.0 || !v.as_ref().is_some_and(|v| v.visible >= 0.5) {
+                continue;
+            }
+            for n in mesh.face_nodes(f) {
+                if let Some(size) = pixel_world_size(&view, height, &mesh.nodes[n].x) {
+                    bound[n] = bound[n].min(px * size);
+                }
+            }
+        }
+        bound
+    }
+
+    /// The image height of the view-dependent cloths (the largest, if they differ).
+    fn view_image_height(&self) -> Real {
+        self.scene
+            .cloths
+            .iter()
+            .filter_map(|c| c.remesh.as_ref().filter(|r| r.mode == RemeshMode::View))
+            .map(|r| r.view.image_height)
+            .fold(0.0, Real::max)
+    }
+
     /// How far the remesh from `before` (seen as `views` say) moved the view-dependent cloth on
     /// screen, seen by the camera now in an image of the cloths' `image_height`
     /// (`sizing::remesh_jump`).
     fn screen_jump(&self, before: &Mesh, views: &[Option<FaceView>]) -> Jump {
         let Some(camera) = &self.scene.camera else { return Jump::default() };
-        let height = self
-            .scene
-            .cloths
-            .iter()
-            .filter_map(|c| c.remesh.as_ref().filter(|r| r.mode == RemeshMode::View))
-            .map(|r| r.view.image_height)
-            .fold(0.0, Real::max);
+        let height = self.view_image_height();
         remesh_jump(before, views, &self.state.mesh, &camera.view_at(self.state.time), height)
     }
 
@@ -200,9 +237,10 @@ impl Simulation {
         let preserved = self.preserved_nodes(&params);
         let groups = self.circle_groups();
         let (shapes, damage) = self.shapes_to_carry();
+        let jump = self.jump_bounds(&views);
         let state = &self.state;
         let (finished, stats) =
-            remesh(&state.mesh, vsize, preserved, &groups, &shapes, &damage, &state.rest_x, &limits)
+            remesh_within(&state.mesh, vsize, preserved, &groups, &shapes, &damage, &state.rest_x, &limits, &jump)
                 .map_err(|e| SimError::Mesh(format!("remeshing failed: {e}")))?;
         let changed = stats.splits + stats.collapses + stats.flips > 0;
         let memory = match views.is_empty() {

@@ -51,7 +51,8 @@ impl<'a> Side<'a> {
         let cloths = faces
             .into_iter()
             .map(|fs| {
-                let loc = (!fs.is_empty()).then(|| Locator::from_triangles(fs.iter().map(|&f| corners_u(mesh, f)).collect()));
+                let loc =
+                    (!fs.is_empty()).then(|| Locator::from_triangles(fs.iter().map(|&f| corners_u(mesh, f)).collect()));
                 (fs, loc)
             })
             .collect();
@@ -75,6 +76,13 @@ fn cloth_of(mesh: &Mesh, f: usize) -> usize {
 
 fn corners_u(mesh: &Mesh, f: usize) -> [Vec2; 3] {
     mesh.faces[f].v.map(|v| mesh.verts[v.idx()].u)
+}
+
+/// The world size of one pixel at `p` (m), seen by `view` in an image `height` pixels high,
+/// when `p` is in frame.
+pub fn pixel_world_size(view: &View, height: Real, p: &Vec3) -> Option<Real> {
+    on_screen(view, height, p)?;
+    Some(2.0 * (p - view.eye).dot(&view.forward) * view.tan_half_fov / height)
 }
 
 /// Pixel coordinates of `p` (origin at the image centre, y up) in an image `height` pixels high,
@@ -107,7 +115,9 @@ pub fn remesh_jump(old: &Mesh, old_views: &[Option<FaceView>], new: &Mesh, view:
     let view_cloths: Vec<bool> = {
         let n = old.nodes.iter().map(|n| n.cloth as usize + 1).max().unwrap_or(0);
         let mut c = vec![false; n];
-        (0..old.faces.len()).filter(|&f| old_views.get(f).is_some_and(Option::is_some)).for_each(|f| c[cloth_of(old, f)] = true);
+        (0..old.faces.len())
+            .filter(|&f| old_views.get(f).is_some_and(Option::is_some))
+            .for_each(|f| c[cloth_of(old, f)] = true);
         c
     };
     let of_view_cloth = |m: &Mesh, f: usize| view_cloths.get(cloth_of(m, f)).copied().unwrap_or(false);

@@ -64,6 +64,9 @@ pub struct ViewParams {
     /// Height (pixels) of the depth images that decide occlusion at each camera time of the
     /// window (`occlusion`); 0 turns occlusion off.
     pub occlusion_pixels: usize,
+    /// How far (pixels of an `image_height`-high image) a remesh may move the cloth the camera
+    /// sees (`sizing::remesh_jump`, `remesh::jump`); 0 leaves it unbounded.
+    pub max_jump_pixels: Real,
 }
 
 impl Default for ViewParams {
@@ -83,6 +86,7 @@ impl Default for ViewParams {
             buckling_compensation: false,
             front: 1.0,
             occlusion_pixels: 128,
+            max_jump_pixels: 1.0,
         }
     }
 }

@@ -140,6 +140,7 @@ fn view_params(ctx: &Ctx, path: &str, v: Option<&ViewSpec>, sides: (bool, Real))
         }
         p.occlusion_pixels = h as usize;
     }
+    check("max_jump_pixels", v.max_jump_pixels, 0.0, 1e4, false, &mut p.max_jump_pixels)?;
     check("window", v.window, 0.0, 1e3, false, &mut p.window)?;
     check("hold", v.hold, 0.0, 1e3, false, &mut p.hold)?;
     p.coarsen_time = p.window;
