@@ -31,7 +31,7 @@ fn folded(angle: f64) -> Mesh {
 fn remesh_to(m: &Mesh, h: f64) -> Finished {
     let limits = RemeshLimits { size_min: 0.005, aspect_min: 0.2, coarsen: true };
     let vsize = vec![Mat2::identity() / (h * h); m.verts.len()];
-    let (done, _) = remesh(m, vsize, vec![false; m.nodes.len()], &[], &[], &[], &[], &limits).unwrap();
+    let (done, _) = remesh(m, vsize, vec![false; m.nodes.len()], &[], &[], &[], &[], &limits, &[]).unwrap();
     done.mesh.validate().unwrap();
     done
 }

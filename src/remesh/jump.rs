@@ -137,7 +137,7 @@ mod tests {
     use super::*;
     use crate::math::Mat2;
     use crate::mesh::{rectangle, Mesh};
-    use crate::remesh::{remesh_within, RemeshLimits};
+    use crate::remesh::{remesh, RemeshLimits};
 
     /// The farthest a material point at a node of either mesh lies from the other mesh's
     /// surface at the same material point (world space).
@@ -172,7 +172,7 @@ mod tests {
         let limits = RemeshLimits { size_min: 0.01, aspect_min: 0.2, coarsen: true };
         let run = |jump: &[Real]| {
             let pinned = vec![false; mesh.nodes.len()];
-            let (done, stats) = remesh_within(&mesh, vsize.clone(), pinned, &[], &[], &[], &[], &limits, jump).unwrap();
+            let (done, stats) = remesh(&mesh, vsize.clone(), pinned, &[], &[], &[], &[], &limits, jump).unwrap();
             done.mesh.validate().unwrap();
             (done.mesh, stats)
         };

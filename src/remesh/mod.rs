@@ -47,29 +47,13 @@ pub struct RemeshLimits {
 /// survive; `groups` (empty: none) gives nodes a group that a node split between two of them
 /// joins; `shapes` are the faces' rest shape operators (`rest_shape`; empty for a flat rest
 /// shape) and `damage` their plastic damage (empty: none); `rest_x` the nodes' rest embedding
-/// (empty: none; a split's node takes the midpoint). Returns the new mesh with the map from old
-/// to new node ids, the new faces' rest shape operators and damage, the nodes' groups and rest
-/// embedding.
+/// (empty: none; a split's node takes the midpoint); no flip or collapse may move a point of the
+/// surface near node n farther than `jump[n]` (m; empty for no bound: the view mode's bound of a
+/// pixel on screen for the cloth the camera sees, `jump.rs`; a split's node takes the smaller
+/// bound of its edge's ends). Returns the new mesh with the map from old to new node ids, the new
+/// faces' rest shape operators and damage, the nodes' groups and rest embedding.
 #[allow(clippy::too_many_arguments)]
 pub fn remesh(
-    mesh: &Mesh,
-    vsize: Vec<Mat2>,
-    pinned: Vec<bool>,
-    groups: &[u32],
-    shapes: &[Mat2],
-    damage: &[Real],
-    rest_x: &[Vec3],
-    limits: &RemeshLimits,
-) -> Result<(Finished, RemeshStats), MeshError> {
-    remesh_within(mesh, vsize, pinned, groups, shapes, damage, rest_x, limits, &[])
-}
-
-/// `remesh`, where no flip or collapse may move a point of the surface near node n farther than
-/// `jump[n]` (m; per node of `mesh`, empty for no bound): the view mode's bound of one pixel on
-/// screen for the cloth the camera sees (`jump.rs`; nodes a split creates take the smaller bound
-/// of the edge's ends).
-#[allow(clippy::too_many_arguments)]
-pub fn remesh_within(
     mesh: &Mesh,
     vsize: Vec<Mat2>,
     pinned: Vec<bool>,

@@ -72,7 +72,8 @@ fn full_remesh_meets_the_metric() {
             Mat2::new(1.0 / (hx * hx), 0.0, 0.0, 1.0 / (0.15 * 0.15))
         })
         .collect();
-    let (done, stats) = remesh(&mesh, vsize, vec![false; mesh.nodes.len()], &[], &[], &[], &[], &limits(0.02)).unwrap();
+    let (done, stats) =
+        remesh(&mesh, vsize, vec![false; mesh.nodes.len()], &[], &[], &[], &[], &limits(0.02), &[]).unwrap();
     done.mesh.validate().unwrap();
     assert!(stats.splits > 0);
     // Re-evaluate the same field on the new verts and check every edge.
@@ -101,7 +102,8 @@ fn flat_sheet_at_rest_with_its_own_size_is_left_alone() {
     // Edges are 0.1 (axis) and 0.141 (diagonal): a sizing of 0.16 keeps them all under 1 and
     // collapses would make edges ≥ 0.2 > 0.9 · 0.16.
     let (done, stats) =
-        remesh(&mesh, uniform(&mesh, 0.16), vec![false; mesh.nodes.len()], &[], &[], &[], &[], &limits(0.01)).unwrap();
+        remesh(&mesh, uniform(&mesh, 0.16), vec![false; mesh.nodes.len()], &[], &[], &[], &[], &limits(0.01), &[])
+            .unwrap();
     assert_eq!((stats.splits, stats.collapses), (0, 0), "{stats:?}");
     assert_eq!(done.mesh.nodes.len(), mesh.nodes.len());
     for (i, n) in mesh.nodes.iter().enumerate() {
@@ -140,7 +142,7 @@ fn sharp_fold_refines_along_the_fold_only() {
     for _ in 0..4 {
         let vs = vertex_metrics(&mesh, &face_metrics(&mesh, &[Some(p.clone())], &[], &[], &[]));
         let (done, _) =
-            remesh(&mesh, vs, vec![false; mesh.nodes.len()], &[], &[], &[], &[], &limits(p.size_min)).unwrap();
+            remesh(&mesh, vs, vec![false; mesh.nodes.len()], &[], &[], &[], &[], &limits(p.size_min), &[]).unwrap();
         mesh = done.mesh;
         fold(&mut mesh);
     }
@@ -173,7 +175,7 @@ fn splits_between_nodes_of_a_group_join_it() {
     groups[3] = 5;
     let fine = vec![Mat2::identity() / (0.2 * 0.2); mesh.verts.len()];
     let pinned = vec![true; mesh.nodes.len()];
-    let (done, stats) = remesh(&mesh, fine, pinned, &groups, &[], &[], &[], &limits(0.05)).unwrap();
+    let (done, stats) = remesh(&mesh, fine, pinned, &groups, &[], &[], &[], &limits(0.05), &[]).unwrap();
     assert!(stats.splits > 0);
     assert_eq!(done.groups.len(), done.mesh.nodes.len());
     for (old, g) in groups.iter().enumerate() {

@@ -82,7 +82,7 @@ pub fn auto_targets(
             }
             let pinned = vec![false; mesh.nodes.len()];
             let vs = std::mem::take(&mut vsize[c]);
-            let (finished, stats) = remesh(mesh, vs, pinned, &[], &[], &[], &[], &limits)
+            let (finished, stats) = remesh(mesh, vs, pinned, &[], &[], &[], &[], &limits, &[])
                 .map_err(|e| ResampleError::Auto(format!("remeshing: {e}")))?;
             *mesh = finished.mesh;
             done[c] = stats.splits == 0;

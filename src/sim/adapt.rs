@@ -9,7 +9,7 @@ use crate::io::stats::ViewFrameStats;
 use crate::math::{Mat2, Real};
 use crate::mesh::Mesh;
 use crate::remesh::rest_shape::{edge_angles_from_shapes, face_shape, face_shapes};
-use crate::remesh::{remesh_within, Finished, RemeshLimits, RemeshStats};
+use crate::remesh::{remesh, Finished, RemeshLimits, RemeshStats};
 use crate::scene::RemeshMode;
 use crate::sizing::remesh_jump::{pixel_world_size, remesh_jump, Jump};
 use crate::sizing::view::{face_views, view_summary};
@@ -240,7 +240,7 @@ impl Simulation {
         let jump = self.jump_bounds(&views);
         let state = &self.state;
         let (finished, stats) =
-            remesh_within(&state.mesh, vsize, preserved, &groups, &shapes, &damage, &state.rest_x, &limits, &jump)
+            remesh(&state.mesh, vsize, preserved, &groups, &shapes, &damage, &state.rest_x, &limits, &jump)
                 .map_err(|e| SimError::Mesh(format!("remeshing failed: {e}")))?;
         let changed = stats.splits + stats.collapses + stats.flips > 0;
         let memory = match views.is_empty() {

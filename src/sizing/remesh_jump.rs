@@ -33,7 +33,7 @@ pub struct Jump {
     pub points: usize,
 }
 
-/// One cloth's faces of a mesh in material space, for locating material points.
+/// A mesh's faces in material space, cloth by cloth, for locating material points.
 struct Side<'a> {
     mesh: &'a Mesh,
     /// Per cloth: the faces of that cloth, and a locator over their material triangles
