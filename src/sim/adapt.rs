@@ -274,7 +274,9 @@ impl Simulation {
             }
         }
         if let Some(before) = before {
+            let clock = Instant::now();
             let jump = self.screen_jump(&before, &views);
+            self.ws.timers.since(Stage::View, clock);
             let kept = self.ws.remesh_jump.get_or_insert_with(Jump::default);
             (kept.max_px, kept.p99_px) = (kept.max_px.max(jump.max_px), kept.p99_px.max(jump.p99_px));
             kept.points += jump.points;
