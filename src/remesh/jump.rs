@@ -13,7 +13,7 @@ use crate::math::{cross2, Real, Vec2, Vec3};
 
 use super::ops::Op;
 use super::work::Work;
-use crate::resample::locate::Locator;
+use crate::resample::locate::{by_group, Locator};
 
 /// A face over material corners `u` with world corners `x`.
 type Tri = ([Vec2; 3], [Vec3; 3]);
@@ -90,17 +90,8 @@ impl Start {
         let alive: Vec<usize> = (0..w.faces.len()).filter(|&f| w.falive[f]).collect();
         let tris: Vec<Tri> =
             alive.iter().map(|&f| w.faces[f]).map(|t| (t.map(|v| w.u[v]), t.map(|v| w.x[w.vnode[v]]))).collect();
-        let n_cloths = w.cloth.iter().map(|&c| c as usize + 1).max().unwrap_or(0);
-        let mut per = vec![Vec::new(); n_cloths];
-        for (k, &f) in alive.iter().enumerate() {
-            per[w.cloth[w.vnode[w.faces[f][0]]] as usize].push(k);
-        }
-        let cloths = per
-            .into_iter()
-            .map(|fs| {
-                (!fs.is_empty()).then(|| (fs.clone(), Locator::from_triangles(fs.iter().map(|&k| tris[k].0).collect())))
-            })
-            .collect();
+        let cloths =
+            by_group(tris.iter().enumerate().map(|(k, t)| (k, t.0, w.cloth[w.vnode[w.faces[alive[k]][0]]] as usize)));
         Start { tris, cloths }
     }
 

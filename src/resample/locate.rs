@@ -12,6 +12,22 @@ pub struct Hit {
     pub outside: Real,
 }
 
+/// One locator per group of triangles (the cloths of a mesh, whose material spaces overlap):
+/// `items` gives each triangle's id, material corners and group. Per group, the ids of its
+/// triangles in the order given (`Hit::triangle` of its locator indexes that list) and the
+/// locator; `None` for a group without triangles.
+pub fn by_group(items: impl Iterator<Item = (usize, [Vec2; 3], usize)>) -> Vec<Option<(Vec<usize>, Locator)>> {
+    let mut groups: Vec<(Vec<usize>, Vec<[Vec2; 3]>)> = Vec::new();
+    for (id, uv, g) in items {
+        if groups.len() <= g {
+            groups.resize_with(g + 1, Default::default);
+        }
+        groups[g].0.push(id);
+        groups[g].1.push(uv);
+    }
+    groups.into_iter().map(|(ids, uv)| (!ids.is_empty()).then(|| (ids, Locator::from_triangles(uv)))).collect()
+}
+
 #[derive(Clone, Debug)]
 pub struct Locator {
     uv: Vec<[Vec2; 3]>,

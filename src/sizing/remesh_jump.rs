@@ -20,7 +20,7 @@
 use crate::camera::View;
 use crate::math::{Real, Vec2, Vec3};
 use crate::mesh::Mesh;
-use crate::resample::locate::Locator;
+use crate::resample::locate::{by_group, Locator};
 
 use super::view::FaceView;
 
@@ -38,32 +38,20 @@ struct Side<'a> {
     mesh: &'a Mesh,
     /// Per cloth: the faces of that cloth, and a locator over their material triangles
     /// (indexed like the list).
-    cloths: Vec<(Vec<usize>, Option<Locator>)>,
+    cloths: Vec<Option<(Vec<usize>, Locator)>>,
 }
 
 impl<'a> Side<'a> {
     fn new(mesh: &'a Mesh, counts: impl Fn(usize) -> bool) -> Side<'a> {
-        let n_cloths = mesh.nodes.iter().map(|n| n.cloth as usize + 1).max().unwrap_or(0);
-        let mut faces = vec![Vec::new(); n_cloths];
-        for f in (0..mesh.faces.len()).filter(|&f| counts(f)) {
-            faces[cloth_of(mesh, f)].push(f);
-        }
-        let cloths = faces
-            .into_iter()
-            .map(|fs| {
-                let loc =
-                    (!fs.is_empty()).then(|| Locator::from_triangles(fs.iter().map(|&f| corners_u(mesh, f)).collect()));
-                (fs, loc)
-            })
-            .collect();
-        Side { mesh, cloths }
+        let faces = (0..mesh.faces.len()).filter(|&f| counts(f));
+        Side { mesh, cloths: by_group(faces.map(|f| (f, corners_u(mesh, f), cloth_of(mesh, f)))) }
     }
 
     /// The face of cloth `c` holding material point `u` and the position there, if that cloth
     /// has faces here.
     fn place(&self, c: usize, u: &Vec2) -> Option<(usize, Vec3)> {
-        let (faces, loc) = self.cloths.get(c)?;
-        let hit = loc.as_ref()?.locate(u);
+        let (faces, loc) = self.cloths.get(c)?.as_ref()?;
+        let hit = loc.locate(u);
         let f = faces[hit.triangle];
         let x = self.mesh.face_nodes(f).map(|n| self.mesh.nodes[n].x);
         Some((f, x[0] * hit.bary[0] + x[1] * hit.bary[1] + x[2] * hit.bary[2]))
