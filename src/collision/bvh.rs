@@ -184,6 +184,31 @@ impl Bvh {
         }
     }
 
+    /// Whether any primitive's box (as last built or refitted) overlaps `q`: `query` that stops
+    /// at the first one.
+    pub fn any_overlap(&self, q: &Aabb) -> bool {
+        if self.nodes.is_empty() {
+            return false;
+        }
+        let mut stack = vec![0u32];
+        while let Some(i) = stack.pop() {
+            let n = &self.nodes[i as usize];
+            if !n.aabb.overlaps(q) {
+                continue;
+            }
+            if n.count > 0 {
+                let range = n.start as usize..(n.start + n.count) as usize;
+                if self.leaf_boxes[range].iter().any(|b| b.overlaps(q)) {
+                    return true;
+                }
+            } else {
+                stack.push(n.right);
+                stack.push(n.left);
+            }
+        }
+        false
+    }
+
     /// The primitive nearest to `p`, where `closest(i)` is primitive i's distance to `p` and what
     /// the caller keeps of it: a best-first descent (nearer child box first, the left one when
     /// both are as near), skipping every box no nearer than the best so far.
@@ -458,5 +483,22 @@ mod tests {
         hits.sort_unstable();
         let want: Vec<_> = (0..moved.len()).filter(|&i| moved[i].overlaps(&b[0])).collect();
         assert_eq!(hits, want);
+    }
+
+    #[test]
+    fn any_overlap_is_whether_a_query_finds_anything() {
+        let a = boxes(300, 3);
+        let tree = Bvh::build(&a);
+        let queries = boxes(400, 4);
+        let mut hits = 0;
+        for q in &queries {
+            let mut found = false;
+            tree.query(q, |_| found = true);
+            assert_eq!(tree.any_overlap(q), found);
+            hits += usize::from(found);
+        }
+        // Both answers occur among the queries.
+        assert!(hits > 0 && hits < queries.len(), "{hits} of {}", queries.len());
+        assert!(!Bvh::build(&[]).any_overlap(&queries[0]));
     }
 }

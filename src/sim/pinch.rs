@@ -129,6 +129,10 @@ pub(super) struct BandCache {
     frame: usize,
     present: Vec<bool>,
     pairs: Vec<(usize, usize, Vec<usize>, Vec<usize>)>,
+    /// The cloth nodes where the cache was built, and how far they may move from there before
+    /// it must be built again: only obstacle faces that can come near the cloth are kept.
+    cloth_at: Vec<Vec3>,
+    cloth_margin: Real,
 }
 
 /// Face pairs that face each other at the frame's start by this much (dot product) are kept for
@@ -136,33 +140,60 @@ pub(super) struct BandCache {
 const FRAME_FACING: Real = -0.3;
 
 impl BandCache {
-    /// Whether the cache was built for `frame` with these bodies present.
-    pub(super) fn holds(&self, frame: usize, present: &[bool]) -> bool {
-        self.frame == frame && self.present == present
+    /// Whether the cache was built for `frame` with these bodies present, and the cloth nodes
+    /// `x` are still within its margin of where they were.
+    pub(super) fn holds(&self, frame: usize, present: &[bool], x: &[Vec3]) -> bool {
+        let r2 = self.cloth_margin * self.cloth_margin;
+        self.frame == frame
+            && self.present == present
+            && x.len() == self.cloth_at.len()
+            && x.iter().zip(&self.cloth_at).all(|(p, q)| (p - q).norm_squared() <= r2)
     }
 
-    /// The cache for the frame `frame` starting (or resumed) at `t`, `frame_time` long.
+    /// The cache for the frame `frame` from `t` on (its start, a resume, or a step at which the
+    /// cloth left the last cache's margin), `frame_time` long: the cloth's nodes at `t` are `x`,
+    /// its faces `cloth`, its fastest node moving at `speed`.
+    ///
+    /// A band at a later step of the frame holds only obstacle faces within three thicknesses
+    /// of a cloth face then (`bands`), paired only with such faces. So only faces whose box,
+    /// grown by how far their own vertices travel over the frame, comes within three
+    /// thicknesses and the cloth's margin of a cloth face now are paired here, each with the
+    /// faces of the other body whose grown boxes come within twice the thickness of its own;
+    /// and the cache holds while no cloth node has moved farther than that margin (`holds`).
+    /// The bands are those of the whole bodies' pairs (most of a dancer's joints are far from
+    /// the dress, and a slow shoulder's faces need not be paired as far as its fast hand's).
     pub(super) fn new(
         world: &CollisionWorld,
         positions: &[Option<Cow<'_, [Vec3]>>],
+        x: &[Vec3],
+        cloth: &[([usize; 3], [Vec3; 3])],
+        speed: Real,
         t: Real,
         frame_time: Real,
         frame: usize,
     ) -> Self {
         let th = world.params.thickness;
+        let cloth_margin = (2.0 * speed * frame_time).max(4.0 * th);
+        let cloth_boxes: Vec<Aabb> = cloth.iter().map(|(_, c)| Aabb::from_points(c)).collect();
+        let cloth_tree = Bvh::build(&cloth_boxes);
+        let near_cloth = |bx: &Aabb| cloth_tree.any_overlap(bx);
         let present: Vec<bool> = positions.iter().map(Option::is_some).collect();
         // How far each body's vertices move over the frame (at its middle and end; ×1.25 for the
-        // arcs in between).
-        let travel: Vec<Real> = (0..world.bodies.len())
+        // arcs in between), and the farthest of each body.
+        let vertex_travel: Vec<Vec<Real>> = (0..world.bodies.len())
             .map(|k| {
-                let (Some(x), false) = (positions[k].as_deref(), world.bodies[k].is_static()) else { return 0.0 };
-                let moved = |s: Real| {
-                    let y = world.bodies[k].positions_at(t + s * frame_time);
-                    x.iter().zip(&y).map(|(p, q)| (q - p).norm()).fold(0.0, Real::max)
+                let (Some(x), false) = (positions[k].as_deref(), world.bodies[k].is_static()) else {
+                    return Vec::new();
                 };
-                1.25 * moved(0.5).max(moved(1.0))
+                let (mid, end) =
+                    (world.bodies[k].positions_at(t + 0.5 * frame_time), world.bodies[k].positions_at(t + frame_time));
+                x.iter()
+                    .zip(mid.iter().zip(&end))
+                    .map(|(p, (m, e))| 1.25 * (m - p).norm().max((e - p).norm()))
+                    .collect()
             })
             .collect();
+        let travel: Vec<Real> = vertex_travel.iter().map(|v| v.iter().copied().fold(0.0, Real::max)).collect();
         let boxes: Vec<_> =
             (0..world.bodies.len()).map(|b| world.body_box(b, t).map(|bx| bx.inflate(th + travel[b]))).collect();
         // Pairs of present bodies whose boxes meet, then each pair's facing faces (the heavy
@@ -174,20 +205,38 @@ impl BandCache {
                 _ => None,
             })
             .collect();
+        // A body's faces that `keep` accepts at `t`, their boxes grown by how far their own
+        // vertices travel over the frame, kept when within three thicknesses and the cloth's
+        // margin of a cloth face.
+        let swept = |k: usize, x: &[Vec3], keep: &dyn Fn(&Aabb) -> bool| -> Faces {
+            let tris = world.bodies[k].triangles();
+            let (faces, boxes, normals) = faces_where(tris, x, 0..tris.len(), keep);
+            let mut out: Faces = (Vec::new(), Vec::new(), Vec::new());
+            for ((f, bx), n) in faces.into_iter().zip(boxes).zip(normals) {
+                let tau = vertex_travel[k].as_slice();
+                let grow = tris[f].iter().map(|&i| tau.get(i).copied().unwrap_or(0.0)).fold(0.0, Real::max);
+                let bx = bx.inflate(grow);
+                if near_cloth(&bx.inflate(3.0 * th + cloth_margin)) {
+                    out.0.push(f);
+                    out.1.push(bx);
+                    out.2.push(n);
+                }
+            }
+            out
+        };
         let pairs = meeting
             .par_iter()
             .filter_map(|&(a, b, box_a, box_b)| {
                 let (xa, xb) = (positions[a].as_deref()?, positions[b].as_deref()?);
                 let reach = 2.0 * th + travel[a] + travel[b];
-                let (ta, tb) = (world.bodies[a].triangles(), world.bodies[b].triangles());
                 let (ra, rb) = (box_b.inflate(reach), box_a.inflate(reach));
-                let side_a = faces_where(ta, xa, 0..ta.len(), |bx| bx.overlaps(&ra));
-                let side_b = faces_where(tb, xb, 0..tb.len(), |bx| bx.overlaps(&rb));
-                let (side_a, side_b) = facing_pairs(&side_a, &side_b, reach, FRAME_FACING)?;
+                let side_a = swept(a, xa, &|bx| bx.overlaps(&ra));
+                let side_b = swept(b, xb, &|bx| bx.overlaps(&rb));
+                let (side_a, side_b) = facing_pairs(&side_a, &side_b, 2.0 * th, FRAME_FACING)?;
                 Some((a, b, side_a, side_b))
             })
             .collect();
-        BandCache { frame, present, pairs }
+        BandCache { frame, present, pairs, cloth_at: x.to_vec(), cloth_margin }
     }
 }
 
@@ -207,11 +256,7 @@ pub(super) fn bands<'a>(
     }
     let cloth_boxes: Vec<Aabb> = cloth.iter().map(|(_, c)| Aabb::from_points(c)).collect();
     let cloth_tree = Bvh::build(&cloth_boxes);
-    let near_cloth = |bx: &Aabb| {
-        let mut hit = false;
-        cloth_tree.query(&bx.inflate(reach + th), |_| hit = true);
-        hit
-    };
+    let near_cloth = |bx: &Aabb| cloth_tree.any_overlap(&bx.inflate(reach + th));
     // The box of some faces of a body at positions x.
     let faces_box = |tris: &[[usize; 3]], x: &[Vec3], faces: &[usize]| {
         Aabb::from_points(faces.iter().flat_map(|&f| tris[f].map(|i| &x[i])))
@@ -401,25 +446,74 @@ pub(super) fn pinch_points(world: &CollisionWorld, bands: &[Band], end: &mut Ste
 }
 
 /// The nodes of every cloth face (`cloth`: the faces' nodes and corners) within `th` of a pinch
-/// point, each with that pinch's velocity (the first pinch found for it).
+/// point, each with that pinch's velocity (the first pinch, in `pinches`' order, found for it).
+/// The pinch points are searched in a tree over them: a moving dancer's joints give hundreds.
 pub(super) fn faces_at_pinches(pinches: &[Pinch], cloth: &[([usize; 3], [Vec3; 3])], th: Real) -> Vec<(usize, Vec3)> {
     if pinches.is_empty() {
         return Vec::new();
     }
-    let all = Aabb::from_points(pinches.iter().map(|p| &p.x)).inflate(th);
+    let boxes: Vec<Aabb> = pinches.iter().map(|p| Aabb { min: p.x, max: p.x }).collect();
+    let tree = Bvh::build(&boxes);
+    let first: Vec<Option<usize>> = cloth
+        .par_iter()
+        .map(|(_, [a, b, c])| {
+            // A point lies in the grown box exactly when its own (degenerate) box overlaps it.
+            let bx = Aabb::from_points([a, b, c]).inflate(th);
+            let mut first: Option<usize> = None;
+            tree.query(&bx, |k| {
+                if first.is_none_or(|f| k < f) && closest_point_triangle(&pinches[k].x, a, b, c).dist < th {
+                    first = Some(k);
+                }
+            });
+            first
+        })
+        .collect();
     let mut out = Vec::new();
-    for (nodes, [a, b, c]) in cloth {
-        let bx = Aabb::from_points([a, b, c]);
-        if !bx.overlaps(&all) {
-            continue;
-        }
-        let bx = bx.inflate(th);
-        let hit = pinches
-            .iter()
-            .find(|p| bx.distance_squared(&p.x) == 0.0 && closest_point_triangle(&p.x, a, b, c).dist < th);
-        if let Some(p) = hit {
-            out.extend(nodes.map(|i| (i, p.v)));
+    for ((nodes, _), k) in cloth.iter().zip(first) {
+        if let Some(k) = k {
+            out.extend(nodes.map(|i| (i, pinches[k].v)));
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::test_rng::Rng;
+
+    /// The first pinch in order within `th` of each face, by scanning them all.
+    fn brute(pinches: &[Pinch], cloth: &[([usize; 3], [Vec3; 3])], th: Real) -> Vec<(usize, Vec3)> {
+        let mut out = Vec::new();
+        for (nodes, [a, b, c]) in cloth {
+            let bx = Aabb::from_points([a, b, c]).inflate(th);
+            let hit = pinches
+                .iter()
+                .find(|p| bx.distance_squared(&p.x) == 0.0 && closest_point_triangle(&p.x, a, b, c).dist < th);
+            if let Some(p) = hit {
+                out.extend(nodes.map(|i| (i, p.v)));
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn faces_at_pinches_finds_the_first_pinch_of_each_face() {
+        let mut rng = Rng(7);
+        let mut point = |s: Real| Vec3::new(rng.uniform() * s, rng.uniform() * s, rng.uniform() * 0.02);
+        let cloth: Vec<([usize; 3], [Vec3; 3])> = (0..400)
+            .map(|f| {
+                let o = point(1.0);
+                ([3 * f, 3 * f + 1, 3 * f + 2], [o, o + Vec3::new(0.03, 0.0, 0.0), o + Vec3::new(0.0, 0.03, 0.0)])
+            })
+            .collect();
+        // Several pinches near one another, so that a face is near more than one.
+        let pinches: Vec<Pinch> =
+            (0..300).map(|k| Pinch { x: point(1.0), v: Vec3::new(k as Real, 0.0, 0.0) }).collect();
+        let th = 0.01;
+        let want = brute(&pinches, &cloth, th);
+        assert!(want.len() > 30, "{} nodes held", want.len());
+        assert_eq!(faces_at_pinches(&pinches, &cloth, th), want);
+        assert!(faces_at_pinches(&[], &cloth, th).is_empty());
+    }
 }

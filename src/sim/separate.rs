@@ -146,8 +146,10 @@ impl Simulation {
         let positions = pinch::body_positions(world, t);
         let present_now: Vec<bool> = positions.iter().map(Option::is_some).collect();
         let frame = self.state.frame;
-        if !self.ws.pinch_faces.as_ref().is_some_and(|c| c.holds(frame, &present_now)) {
-            self.ws.pinch_faces = Some(BandCache::new(world, &positions, t, self.scene.frame_time, frame));
+        if !self.ws.pinch_faces.as_ref().is_some_and(|c| c.holds(frame, &present_now, &x)) {
+            let speed = self.state.mesh.nodes.iter().map(|n| n.v.norm()).fold(0.0, Real::max);
+            let ft = self.scene.frame_time;
+            self.ws.pinch_faces = Some(BandCache::new(world, &positions, &x, &cloth, speed, t, ft, frame));
         }
         let cache = self.ws.pinch_faces.as_ref().expect("built above");
         let bands = pinch::bands(world, &positions, cache, &cloth);
