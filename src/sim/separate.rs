@@ -63,11 +63,13 @@
 //!   both, far from where their surfaces meet.
 //!
 //! Both rules look only where two obstacles' faces face each other within twice the thickness
-//! near the cloth (`pinch.rs`: *bands*, from local geometry on those faces, found once per frame
-//! with the bodies' travel as margin and kept per step where the cloth is). So the stage runs at
-//! every step at which two present obstacles' bounding boxes come within twice the thickness of
-//! each other, costing next to nothing where no band forms (`dress_dance`: 0.025 s of a 0.6 s
-//! frame), and outside the start's separation it only traps: a node released from a pinch
+//! near the cloth (`pinch.rs`: *bands*, from local geometry on those faces; the faces that may
+//! form them are found once per frame near the cloth, each with its own vertices' travel as
+//! margin, again when the cloth moves beyond its margin, and kept per step where the cloth is).
+//! So the stage runs at every step at which two present obstacles' bounding boxes come within
+//! twice the thickness of each other, costing little where no band forms (`dress_dance` view:
+//! 6 s of a 75 s run, its 16 body parts overlapping at every joint), and outside the start's
+//! separation it only traps: a node released from a pinch
 //! inside one obstacle is left to the contacts and impact zones, as anywhere else in a run
 //! (walking it out, a projection no collision stage checks, pushed it through the cloth layers
 //! beside it). Cloth held in a pinch crosses the obstacles there, as in ARCSim; nowhere else.
