@@ -161,32 +161,20 @@ impl Bvh {
     /// Calls `f(primitive)` for every primitive whose box (as last built or refitted) overlaps
     /// `q`.
     pub fn query(&self, q: &Aabb, mut f: impl FnMut(usize)) {
-        if self.nodes.is_empty() {
-            return;
-        }
-        let mut stack = vec![0u32];
-        while let Some(i) = stack.pop() {
-            let n = &self.nodes[i as usize];
-            if !n.aabb.overlaps(q) {
-                continue;
-            }
-            if n.count > 0 {
-                let range = n.start as usize..(n.start + n.count) as usize;
-                for (&p, b) in self.order[range.clone()].iter().zip(&self.leaf_boxes[range]) {
-                    if b.overlaps(q) {
-                        f(p as usize);
-                    }
-                }
-            } else {
-                stack.push(n.right);
-                stack.push(n.left);
-            }
-        }
+        self.visit(q, |p| {
+            f(p);
+            false
+        });
     }
 
     /// Whether any primitive's box (as last built or refitted) overlaps `q`: `query` that stops
     /// at the first one.
     pub fn any_overlap(&self, q: &Aabb) -> bool {
+        self.visit(q, |_| true)
+    }
+
+    /// `query`'s descent, stopped (and true returned) as soon as `f` returns true.
+    fn visit(&self, q: &Aabb, mut f: impl FnMut(usize) -> bool) -> bool {
         if self.nodes.is_empty() {
             return false;
         }
@@ -198,8 +186,10 @@ impl Bvh {
             }
             if n.count > 0 {
                 let range = n.start as usize..(n.start + n.count) as usize;
-                if self.leaf_boxes[range].iter().any(|b| b.overlaps(q)) {
-                    return true;
+                for (&p, b) in self.order[range.clone()].iter().zip(&self.leaf_boxes[range]) {
+                    if b.overlaps(q) && f(p as usize) {
+                        return true;
+                    }
                 }
             } else {
                 stack.push(n.right);
