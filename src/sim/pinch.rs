@@ -174,8 +174,7 @@ impl BandCache {
     ) -> Self {
         let th = world.params.thickness;
         let cloth_margin = (2.0 * speed * frame_time).max(4.0 * th);
-        let cloth_boxes: Vec<Aabb> = cloth.iter().map(|(_, c)| Aabb::from_points(c)).collect();
-        let cloth_tree = Bvh::build(&cloth_boxes);
+        let cloth_tree = cloth_tree(cloth);
         let near_cloth = |bx: &Aabb| cloth_tree.any_overlap(bx);
         let present: Vec<bool> = positions.iter().map(Option::is_some).collect();
         // How far each body's vertices move over the frame (at its middle and end; ×1.25 for the
@@ -209,11 +208,10 @@ impl BandCache {
         // vertices travel over the frame, kept when within three thicknesses and the cloth's
         // margin of a cloth face.
         let swept = |k: usize, x: &[Vec3], keep: &dyn Fn(&Aabb) -> bool| -> Faces {
-            let tris = world.bodies[k].triangles();
+            let (tris, tau) = (world.bodies[k].triangles(), vertex_travel[k].as_slice());
             let (faces, boxes, normals) = faces_where(tris, x, 0..tris.len(), keep);
             let mut out: Faces = (Vec::new(), Vec::new(), Vec::new());
             for ((f, bx), n) in faces.into_iter().zip(boxes).zip(normals) {
-                let tau = vertex_travel[k].as_slice();
                 let grow = tris[f].iter().map(|&i| tau.get(i).copied().unwrap_or(0.0)).fold(0.0, Real::max);
                 let bx = bx.inflate(grow);
                 if near_cloth(&bx.inflate(3.0 * th + cloth_margin)) {
@@ -254,8 +252,7 @@ pub(super) fn bands<'a>(
     if cache.pairs.is_empty() || cloth.is_empty() {
         return Vec::new();
     }
-    let cloth_boxes: Vec<Aabb> = cloth.iter().map(|(_, c)| Aabb::from_points(c)).collect();
-    let cloth_tree = Bvh::build(&cloth_boxes);
+    let cloth_tree = cloth_tree(cloth);
     let near_cloth = |bx: &Aabb| cloth_tree.any_overlap(&bx.inflate(reach + th));
     // The box of some faces of a body at positions x.
     let faces_box = |tris: &[[usize; 3]], x: &[Vec3], faces: &[usize]| {
@@ -281,6 +278,11 @@ pub(super) fn bands<'a>(
             Some(Band { sides: [Patch::new(*a, xa, ta, side_a, reach), Patch::new(*b, xb, tb, side_b, reach)] })
         })
         .collect()
+}
+
+/// A tree over the cloth faces' boxes (`cloth`: the faces' nodes and corners).
+fn cloth_tree(cloth: &[([usize; 3], [Vec3; 3])]) -> Bvh {
+    Bvh::build(&cloth.iter().map(|(_, c)| Aabb::from_points(c)).collect::<Vec<_>>())
 }
 
 /// Some faces of a body at positions `x`: those `keep` accepts by their box, with their boxes
