@@ -173,12 +173,6 @@ impl Bvh {
         self.visit(q, |_| true)
     }
 
-    /// Whether `f` holds for any primitive whose box overlaps `q`: `query` that stops at the
-    /// first primitive `f` accepts.
-    pub fn any_where(&self, q: &Aabb, f: impl FnMut(usize) -> bool) -> bool {
-        self.visit(q, f)
-    }
-
     /// `query`'s descent, stopped (and true returned) as soon as `f` returns true.
     fn visit(&self, q: &Aabb, mut f: impl FnMut(usize) -> bool) -> bool {
         if self.nodes.is_empty() {

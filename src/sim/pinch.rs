@@ -310,11 +310,6 @@ fn faces_where(
 
 /// Of two bodies' faces, those of each within `reach` (box-wise) of a face of the other whose
 /// normal faces theirs (dot product below `facing`); `None` when there are none.
-///
-/// Only which faces have a partner matters, not the pairs: each side's faces are searched for
-/// their first partner in a tree over the other side's boxes (a's boxes grown by `reach`, so
-/// that both searches test the same boxes), and the search stops there. On `crowd_5` three in
-/// four of the box-overlapping pairs belonged to faces that have a partner.
 fn facing_pairs(
     (fa, ba, na): &Faces,
     (fb, bb, nb): &Faces,
@@ -324,20 +319,25 @@ fn facing_pairs(
     if fa.is_empty() || fb.is_empty() {
         return None;
     }
-    let grown_a: Vec<Aabb> = ba.iter().map(|b| b.inflate(reach)).collect();
-    let faces_each_other = |k: usize, j: usize| na[k].dot(&nb[j]) < facing;
     let tree_b = Bvh::build(bb);
-    let side_a: Vec<usize> =
-        (0..fa.len()).filter(|&k| tree_b.any_where(&grown_a[k], |j| faces_each_other(k, j))).map(|k| fa[k]).collect();
-    if side_a.is_empty() {
-        return None;
+    let mut partner = vec![false; fb.len()];
+    let mut side_a = Vec::new();
+    for k in 0..fa.len() {
+        let mut found = false;
+        tree_b.query(&ba[k].inflate(reach), |j| {
+            if na[k].dot(&nb[j]) < facing {
+                found = true;
+                partner[j] = true;
+            }
+        });
+        if found {
+            side_a.push(fa[k]);
+        }
     }
-    let tree_a = Bvh::build(&grown_a);
-    let mut side_b: Vec<usize> =
-        (0..fb.len()).filter(|&j| tree_a.any_where(&bb[j], |k| faces_each_other(k, j))).map(|j| fb[j]).collect();
+    let mut side_b: Vec<usize> = (0..fb.len()).filter(|&j| partner[j]).map(|j| fb[j]).collect();
     side_b.sort_unstable();
     side_b.dedup();
-    Some((side_a, side_b))
+    (!side_a.is_empty()).then_some((side_a, side_b))
 }
 
 /// Per cloth node, (body, hit) for each side of a band it lies within the thickness of (or
