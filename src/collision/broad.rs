@@ -24,6 +24,8 @@ pub struct Interval<'a> {
     pub obs1: &'a [Vec3],
 }
 
+/// The boxes by their definition, for the tests (the search merges its points' `spans`).
+#[cfg(test)]
 impl Interval<'_> {
     fn cloth_box(&self, ids: &[usize]) -> Aabb {
         Aabb::from_points(ids.iter().map(|&i| &self.cloth0[i]))
@@ -65,6 +67,8 @@ struct ObsFit {
     obs0: Vec<Vec3>,
     obs1: Vec<Vec3>,
     pad: Real,
+    /// Each vertex's box over the interval (`spans`).
+    spans: Vec<Aabb>,
     face_tree: Bvh,
     edge_tree: Bvh,
     node_tree: Bvh,
@@ -77,14 +81,27 @@ impl ObsFit {
     }
 }
 
-fn refit(slot: &mut Option<Bvh>, boxes: &[Aabb]) -> Bvh {
+/// The tree of `count` primitives, primitive p's box `boxed(p)`: the one in `slot` refitted when
+/// it has as many, built otherwise.
+fn fit(slot: &mut Option<Bvh>, count: usize, boxed: impl Fn(usize) -> Aabb + Sync) -> Bvh {
     match slot.take() {
-        Some(mut t) if t.len() == boxes.len() => {
-            t.refit(boxes);
+        Some(mut t) if t.len() == count => {
+            t.refit_by(boxed);
             t
         }
-        _ => Bvh::build(boxes),
+        _ => Bvh::build(&(0..count).into_par_iter().with_min_len(PAR_GRAIN).map(&boxed).collect::<Vec<_>>()),
     }
+}
+
+/// Each point's box over the interval (its start and end positions). A primitive's box over
+/// the interval is the merge of its points' (a minimum of the same coordinates), so the
+/// primitives' boxes are merged from these.
+fn spans(x0: &[Vec3], x1: &[Vec3]) -> Vec<Aabb> {
+    x0.par_iter().with_min_len(PAR_GRAIN).zip(x1).map(|(a, b)| Aabb::from_points([a, b])).collect()
+}
+
+fn merged<const K: usize>(spans: &[Aabb], ids: &[usize; K]) -> Aabb {
+    ids.iter().fold(Aabb::empty(), |a, &i| a.merge(&spans[i]))
 }
 
 fn sorted_edge(a: usize, b: usize) -> [usize; 2] {
@@ -140,13 +157,10 @@ impl BroadPhase {
         let faces: Vec<[usize; 3]> = (0..mesh.faces.len()).map(|f| mesh.face_nodes(f)).collect();
         let edges: Vec<[usize; 2]> = mesh.edges.iter().map(|e| sorted_edge(e.n[0].idx(), e.n[1].idx())).collect();
         self.forget_changed(&faces, obs_tris);
-        let face_boxes: Vec<Aabb> = faces.par_iter().with_min_len(PAR_GRAIN).map(|f| iv.cloth_box(f)).collect();
-        let edge_boxes: Vec<Aabb> = edges.par_iter().with_min_len(PAR_GRAIN).map(|e| iv.cloth_box(e)).collect();
-        let node_boxes: Vec<Aabb> =
-            (0..n).into_par_iter().with_min_len(PAR_GRAIN).map(|i| iv.cloth_box(&[i]).inflate(pad)).collect();
-        let cf = refit(&mut self.cloth_faces, &face_boxes);
-        let ce = refit(&mut self.cloth_edges, &edge_boxes);
-        let cn = refit(&mut self.cloth_nodes, &node_boxes);
+        let cloth = spans(iv.cloth0, iv.cloth1);
+        let cf = fit(&mut self.cloth_faces, faces.len(), |f| merged(&cloth, &faces[f]));
+        let ce = fit(&mut self.cloth_edges, edges.len(), |e| merged(&cloth, &edges[e]));
+        let cn = fit(&mut self.cloth_nodes, n, |i| cloth[i].inflate(pad));
         // A query edge's box is its edge box inflated by `pad`; inflating a node's box instead
         // bounds every inflated leaf box below it (rounding is monotone).
         let near_padded = |a: &Aabb, b: &Aabb| a.inflate(pad).overlaps(b);
@@ -231,27 +245,24 @@ impl BroadPhase {
     /// vertices, the same pad), recomputed and its trees refitted otherwise (built for the first
     /// search over these triangles). Call after `forget_changed`.
     fn fit_obstacles(&mut self, obs_tris: &[[usize; 3]], obs_edges: &[[usize; 2]], iv: &Interval, pad: Real) -> ObsFit {
-        let node_boxes = |pad: Real| -> Vec<Aabb> {
-            (0..iv.obs1.len()).into_par_iter().with_min_len(PAR_GRAIN).map(|k| iv.obs_box(&[k]).inflate(pad)).collect()
-        };
         match self.obs_fit.take() {
             Some(fit) if fit.holds(iv) && fit.pad.to_bits() == pad.to_bits() => fit,
             Some(mut fit) if fit.holds(iv) => {
                 fit.pad = pad;
-                fit.node_tree = refit(&mut Some(fit.node_tree), &node_boxes(pad));
+                let spans = &fit.spans;
+                fit.node_tree.refit_by(|k| spans[k].inflate(pad));
                 fit
             }
             old => {
-                let faces: Vec<Aabb> = obs_tris.par_iter().with_min_len(PAR_GRAIN).map(|t| iv.obs_box(t)).collect();
-                let edges: Vec<Aabb> = obs_edges.par_iter().with_min_len(PAR_GRAIN).map(|e| iv.obs_box(e)).collect();
-                let nodes = node_boxes(pad);
+                let spans = spans(iv.obs0, iv.obs1);
                 let (mut ft, mut et, mut nt) = match old {
                     Some(f) => (Some(f.face_tree), Some(f.edge_tree), Some(f.node_tree)),
                     None => (None, None, None),
                 };
-                let (face_tree, edge_tree, node_tree) =
-                    (refit(&mut ft, &faces), refit(&mut et, &edges), refit(&mut nt, &nodes));
-                ObsFit { obs0: iv.obs0.to_vec(), obs1: iv.obs1.to_vec(), pad, face_tree, edge_tree, node_tree }
+                let face_tree = fit(&mut ft, obs_tris.len(), |t| merged(&spans, &obs_tris[t]));
+                let edge_tree = fit(&mut et, obs_edges.len(), |e| merged(&spans, &obs_edges[e]));
+                let node_tree = fit(&mut nt, spans.len(), |k| spans[k].inflate(pad));
+                ObsFit { obs0: iv.obs0.to_vec(), obs1: iv.obs1.to_vec(), pad, spans, face_tree, edge_tree, node_tree }
             }
         }
     }

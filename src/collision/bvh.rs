@@ -141,16 +141,23 @@ impl Bvh {
 
     /// Refits the boxes for new primitive boxes (same primitives, same tree).
     pub fn refit(&mut self, boxes: &[Aabb]) {
+        self.refit_by(|p| boxes[p]);
+    }
+
+    /// `refit` with primitive p's box `boxed(p)`, computed straight into the leaves (in parallel
+    /// for a large tree) instead of from an array of them.
+    pub fn refit_by(&mut self, boxed: impl Fn(usize) -> Aabb + Sync) {
+        use rayon::prelude::*;
+        self.leaf_boxes
+            .par_iter_mut()
+            .with_min_len(crate::math::PAR_GRAIN)
+            .zip(&self.order)
+            .for_each(|(slot, &p)| *slot = boxed(p as usize));
         for i in (0..self.nodes.len()).rev() {
             let n = &self.nodes[i];
             let aabb = if n.count > 0 {
                 let (s, c) = (n.start as usize, n.count as usize);
-                let mut aabb = Aabb::empty();
-                for (slot, &p) in self.leaf_boxes[s..s + c].iter_mut().zip(&self.order[s..s + c]) {
-                    *slot = boxes[p as usize];
-                    aabb = aabb.merge(slot);
-                }
-                aabb
+                self.leaf_boxes[s..s + c].iter().fold(Aabb::empty(), |a, b| a.merge(b))
             } else {
                 self.nodes[n.left as usize].aabb.merge(&self.nodes[n.right as usize].aabb)
             };
