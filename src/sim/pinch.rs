@@ -356,16 +356,23 @@ pub(super) fn node_hits(bands: &[Band], x: &[Vec3], th: Real) -> Vec<Vec<(usize,
             .collect();
         for (&i, pair) in near.iter().zip(found) {
             for (side, q) in band.sides.iter().zip(pair) {
-                let Some(q) = q else { continue };
-                match out[i].iter_mut().find(|(b, _)| *b == side.body) {
-                    Some((_, old)) if old.distance.abs() <= q.distance.abs() => {}
-                    Some((_, old)) => *old = q,
-                    None => out[i].push((side.body, q)),
+                if let Some(q) = q {
+                    keep_nearest(&mut out[i], side.body, q);
                 }
             }
         }
     }
     out
+}
+
+/// A node's hit `q` on `body` kept when the node has none on that body yet or it is nearer than
+/// the one it has.
+fn keep_nearest(hits: &mut Vec<(usize, SdfHit)>, body: usize, q: SdfHit) {
+    match hits.iter_mut().find(|(b, _)| *b == body) {
+        Some((_, old)) if old.distance.abs() <= q.distance.abs() => {}
+        Some((_, old)) => *old = q,
+        None => hits.push((body, q)),
+    }
 }
 
 /// The present obstacles' vertex positions at the step's end, each moving body's computed once,
@@ -591,11 +598,8 @@ mod tests {
         for band in &bands {
             for (i, p) in nodes.iter().enumerate() {
                 for side in &band.sides {
-                    let Some(q) = side.closest(p).filter(|q| q.distance < th) else { continue };
-                    match want[i].iter_mut().find(|(b, _)| *b == side.body) {
-                        Some((_, old)) if old.distance.abs() <= q.distance.abs() => {}
-                        Some((_, old)) => *old = q,
-                        None => want[i].push((side.body, q)),
+                    if let Some(q) = side.closest(p).filter(|q| q.distance < th) {
+                        keep_nearest(&mut want[i], side.body, q);
                     }
                 }
             }
