@@ -139,13 +139,8 @@ impl Bvh {
         self.nodes.first().map(|n| n.aabb)
     }
 
-    /// Refits the boxes for new primitive boxes (same primitives, same tree).
-    pub fn refit(&mut self, boxes: &[Aabb]) {
-        self.refit_by(|p| boxes[p]);
-    }
-
-    /// `refit` with primitive p's box `boxed(p)`, computed straight into the leaves (in parallel
-    /// for a large tree) instead of from an array of them.
+    /// Refits the boxes for new primitive boxes (same primitives, same tree), primitive p's box
+    /// `boxed(p)`, computed straight into the leaves (in parallel for a large tree).
     pub fn refit_by(&mut self, boxed: impl Fn(usize) -> Aabb + Sync) {
         use rayon::prelude::*;
         self.leaf_boxes
@@ -470,7 +465,7 @@ mod tests {
         let (mut ta, tb) = (Bvh::build(&a), Bvh::build(&b));
         assert_eq!(ta.pairs(&tb), brute(&a, &b));
         let moved: Vec<Aabb> = a.iter().map(|x| Aabb { min: x.min * 0.7, max: x.max * 0.7 }).collect();
-        ta.refit(&moved);
+        ta.refit_by(|p| moved[p]);
         assert_eq!(ta.pairs(&tb), brute(&moved, &b));
         let selfp = ta.self_pairs();
         let want: Vec<_> = brute(&moved, &moved).into_iter().filter(|(i, j)| i < j).collect();
