@@ -1,13 +1,17 @@
 //! Broad phase: candidate vertex–face and edge–edge pairs from bounding-volume hierarchies over
-//! cloth nodes, faces and edges and obstacle vertices, faces and edges (refit every call, rebuilt
-//! when a count changes), searched tree against tree in parallel; results are put in query order,
-//! so the candidate list is the same for any thread count.
+//! cloth nodes, faces and edges and obstacle vertices, faces and edges (refit when searched,
+//! rebuilt when a count changes), searched tree against tree in parallel, with the points' boxes
+//! grown so that the pairs found serve the next searches while the points stay within the
+//! growth (`BroadPhase`); results are put in query order, so the candidate list is the same for
+//! any thread count.
+
+use std::time::Instant;
 
 use crate::math::PAR_GRAIN;
 use rayon::prelude::*;
 
 use super::bvh::{Aabb, Bvh};
-use crate::math::{same_bits, Real, Vec3};
+use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
 
 /// A candidate pair: `VF` = `[p, a, b, c]` (vertex p, face abc), `EE` = `[a0, a1, b0, b1]`.
@@ -38,12 +42,28 @@ impl Interval<'_> {
 }
 
 /// The trees of the last search, refitted to the next one's boxes while the primitives are the
-/// same ones (`keys`), rebuilt when they are not: a remesh that keeps the face count renumbers
+/// same ones (`cloth_key`, `obs_key`), rebuilt when they are not: a remesh that keeps the face count renumbers
 /// the faces, and a tree refitted over other primitives stays correct but loses its locality
 /// (dart.json: frames whose remesh kept the count spent 7–9 s instead of 0.25 s in each of
 /// proximity and collision).
 ///
-/// The obstacles' boxes and trees are kept with the positions they were fitted to (`ObsFit`): the
+/// **Cloth–cloth pair lists kept between searches** (issue 17, "proximity and collision
+/// coherence"; the Verlet list of molecular dynamics). The cloth's own pairs can be found with
+/// every cloth node's box grown (`grown`: three times its travel over the search's interval,
+/// plus `reach`, the collision thickness) and kept with those grown boxes (`PairList`, one per
+/// pad: the proximity search's and the collision iterations'). A later search whose nodes' boxes
+/// all lie within the kept ones takes the kept list instead of searching the trees, and applies
+/// to each candidate the box test the tree search applies at its leaves (`overlap`): a pair
+/// whose boxes overlap now overlapped within the grown boxes, so it is in the list (containment
+/// and the boxes' rounding are monotone), and the list is in the tree search's order. So the
+/// candidates, and what the narrow phase makes of them, are exactly a fresh search's: the same
+/// bits whether a list was kept or not, and a resumed run finds what the uninterrupted one did.
+/// A list is found again as soon as one node leaves its grown box, or the primitives change;
+/// whether one is kept at all is measured (`ListSlot`). The cloth–obstacle pairs are searched
+/// afresh every time: a character's vertices outnumber the garment's and its hands outrun any
+/// growth that keeps a list small.
+///
+/// The obstacles' trees are kept with the point boxes they were fitted to (`ObsFit`): the
 /// proximity search and every collision iteration of a step sweep the obstacles over the same
 /// interval, so the later searches of a step take them as they are instead of recomputing
 /// every obstacle primitive's box (on a crowd of five dancers, 134k obstacle faces, that was a
@@ -58,27 +78,93 @@ pub struct BroadPhase {
     cloth_edges: Option<Bvh>,
     cloth_nodes: Option<Bvh>,
     obs_fit: Option<ObsFit>,
+    lists: Vec<ListSlot>,
+    /// Lists are kept only where they are measured to cost less than the trees (`ListSlot`);
+    /// a test keeps them wherever the boxes hold.
+    #[cfg(test)]
+    always_keep: bool,
+    /// Searches of the trees for cloth–cloth pairs (for the tests: how often a list was found
+    /// anew).
+    #[cfg(test)]
+    cloth_searches: usize,
 }
 
-/// The obstacle trees and what they are fitted to: the interval's obstacle positions (faces'
-/// and edges' boxes over it), and the padding the vertex boxes are inflated by (the one part
-/// that depends on the search). The trees hold the boxes.
+/// The obstacle trees and the point boxes they are fitted to (faces' and edges' boxes merged
+/// from them), and the padding the vertex boxes are inflated by (the one part that depends on
+/// the search). The trees hold the boxes.
 struct ObsFit {
-    obs0: Vec<Vec3>,
-    obs1: Vec<Vec3>,
+    points: Vec<Aabb>,
     pad: Real,
-    /// Each vertex's box over the interval (`spans`).
-    spans: Vec<Aabb>,
     face_tree: Bvh,
     edge_tree: Bvh,
     node_tree: Bvh,
 }
 
-impl ObsFit {
-    /// Whether the fit is for these positions (bitwise: a signed zero counts as a change).
-    fn holds(&self, iv: &Interval) -> bool {
-        same_bits(&self.obs0, iv.obs0) && same_bits(&self.obs1, iv.obs1)
+/// Whether two box lists are the same bit for bit (a signed zero counts as a change).
+fn same_boxes(a: &[Aabb], b: &[Aabb]) -> bool {
+    let bits = |b: &Aabb| [b.min, b.max].map(|v| [v.x, v.y, v.z].map(Real::to_bits));
+    a.len() == b.len() && a.iter().zip(b).all(|(p, q)| bits(p) == bits(q))
+}
+
+/// The cloth–cloth candidates of a search whose points' boxes were grown by the reach
+/// (`BroadPhase` doc), in the search's order, with the grown boxes.
+struct PairList {
+    cloth: Vec<Aabb>,
+    /// None while the searches are made from the trees (`SERVED`): the grown boxes then only
+    /// tell whether a list would have served.
+    candidates: Option<Vec<Candidate>>,
+    /// The searches the boxes have held for.
+    served: usize,
+    /// Of those, the ones served from `candidates`, and the seconds they and finding the list
+    /// took.
+    listed: usize,
+    spent: f64,
+}
+
+impl PairList {
+    /// Whether every point's box lies within the one the list was found for.
+    fn holds(&self, cloth: &[Aabb]) -> bool {
+        self.cloth.len() == cloth.len()
+            && self
+                .cloth
+                .par_iter()
+                .with_min_len(PAR_GRAIN)
+                .zip(cloth)
+                .all(|(k, b)| (0..3).all(|j| k.min[j] <= b.min[j] && b.max[j] <= k.max[j]))
     }
+}
+
+/// The pair list of one pad (the proximity search's, the collision iterations') and what lists
+/// and tree searches have cost. Where the points move farther than their growth between
+/// searches, or the grown boxes take in many more pairs than the narrow phase keeps (a coarse
+/// dress on a dancer: 100k–200k cloth–cloth candidates, a handful of contacts), a list costs
+/// more than the tree searches it replaces; so a list is found only where its boxes have held
+/// for `SERVED` searches, and after a list has served, its cost per search (finding it
+/// included) is set against the trees' (measured on the searches made from the trees): after a
+/// list that loses none is found for `FIRST_WAIT` searches, then twice as many after each
+/// further loss, up to `LONGEST_WAIT`. The choice changes only the time taken, never the pairs
+/// (struct doc).
+struct ListSlot {
+    pad: u64,
+    list: Option<PairList>,
+    /// Seconds per search from the trees (a moving average; infinite until measured).
+    tree_s: f64,
+    /// The wait after the last loss, and the searches left of it.
+    wait: usize,
+    skip: usize,
+}
+
+/// The searches without a list after one has lost to the trees, the first time and at most
+/// (a dress on a dancer makes 50–100 searches of each pad a frame).
+const FIRST_WAIT: usize = 16;
+const LONGEST_WAIT: usize = 4096;
+
+/// Which pairs a tree search finds: the cloth's against the obstacles', or the cloth's against
+/// its own.
+#[derive(Clone, Copy, PartialEq)]
+enum Sections {
+    Obstacles,
+    Cloth,
 }
 
 /// The tree of `count` primitives, primitive p's box `boxed(p)`: the one in `slot` refitted when
@@ -104,6 +190,30 @@ fn merged<const K: usize>(spans: &[Aabb], ids: &[usize; K]) -> Aabb {
     ids.iter().fold(Aabb::empty(), |a, &i| a.merge(&spans[i]))
 }
 
+/// How far a point's box `span` (over a search's interval) is grown for a kept list: `AHEAD`
+/// times the point's travel over the interval, plus `reach`.
+fn grown(span: &Aabb, reach: Real) -> Real {
+    AHEAD * (span.max - span.min).max() + reach
+}
+
+/// How many more intervals like the one a list is found over a point's grown box covers at
+/// its travel over it (`grown`).
+const AHEAD: Real = 3.0;
+
+/// A list is found within grown boxes that have held for this many searches (`ListSlot`).
+const SERVED: usize = 3;
+
+/// The box test of candidate `c` (`box_of` each of its points' boxes): the one the tree search
+/// applies at its leaves, for every kind of pair: the target's box (face, or second edge)
+/// against the query's (node, or first edge) inflated by `pad`.
+fn overlap<'a>((kind, c): &Candidate, pad: Real, box_of: impl Fn(usize) -> &'a Aabb) -> bool {
+    let join = |ids: &[usize]| ids.iter().fold(Aabb::empty(), |a, &i| a.merge(box_of(i)));
+    match *kind {
+        VF => join(&c[1..]).overlaps(&box_of(c[0]).inflate(pad)),
+        _ => join(&c[2..]).overlaps(&join(&c[..2]).inflate(pad)),
+    }
+}
+
 fn sorted_edge(a: usize, b: usize) -> [usize; 2] {
     [a.min(b), a.max(b)]
 }
@@ -121,6 +231,7 @@ impl BroadPhase {
     /// passes the same box test a per-query search would apply, so the list is the same.
     /// (The simulation calls `search`; this is its reference form for the tests.)
     #[cfg(test)]
+    #[allow(clippy::too_many_arguments)]
     pub fn candidates(
         &mut self,
         mesh: &Mesh,
@@ -128,15 +239,16 @@ impl BroadPhase {
         obs_edges: &[[usize; 2]],
         iv: &Interval,
         pad: Real,
+        reach: Real,
         self_collision: bool,
     ) -> Vec<Candidate> {
-        let found = self.search(mesh, obs_tris, obs_edges, iv, pad, self_collision, |_| Some(()));
+        let found = self.search(mesh, obs_tris, obs_edges, iv, pad, reach, self_collision, |_| Some(()));
         found.into_iter().map(|(c, ())| c).collect()
     }
 
-    /// `candidates` with the narrow phase run where each candidate is found: `narrow(c)`'s
-    /// results that are `Some`, in the candidates' order, without building the candidate
-    /// list.
+    /// `candidates` with the narrow phase run on each candidate: `narrow(c)`'s results that are
+    /// `Some`, in the candidates' order. From the kept pair list while the points stay within
+    /// `reach` of where it was found (struct doc), from the trees otherwise.
     #[allow(clippy::too_many_arguments)]
     pub fn search<T: Send>(
         &mut self,
@@ -145,7 +257,128 @@ impl BroadPhase {
         obs_edges: &[[usize; 2]],
         iv: &Interval,
         pad: Real,
+        reach: Real,
         self_collision: bool,
+        narrow: impl Fn(Candidate) -> Option<T> + Sync,
+    ) -> Vec<(Candidate, T)> {
+        let faces: Vec<[usize; 3]> = (0..mesh.faces.len()).map(|f| mesh.face_nodes(f)).collect();
+        self.forget_changed(&faces, obs_tris);
+        let edges: Vec<[usize; 2]> = mesh.edges.iter().map(|e| sorted_edge(e.n[0].idx(), e.n[1].idx())).collect();
+        let cloth = spans(iv.cloth0, iv.cloth1);
+        let obs = spans(iv.obs0, iv.obs1);
+        let mut out =
+            self.tree_search(&faces, &edges, obs_tris, obs_edges, &cloth, &obs, pad, Sections::Obstacles, &narrow);
+        if !self_collision {
+            return out;
+        }
+        let no_obs: [Aabb; 0] = [];
+        let filter = |candidates: &[Candidate]| -> Vec<(Candidate, T)> {
+            candidates
+                .par_iter()
+                .with_min_len(PAR_GRAIN)
+                .filter_map(|&c| match overlap(&c, pad, |i| &cloth[i]) {
+                    true => narrow(c).map(|t| (c, t)),
+                    false => None,
+                })
+                .collect()
+        };
+        let list_at = |this: &mut Self, boxes: &[Aabb]| -> Vec<Candidate> {
+            let all = |_| Some(());
+            let found = this.tree_search(&faces, &edges, &[], &[], boxes, &no_obs, pad, Sections::Cloth, all);
+            found.into_iter().map(|(c, ())| c).collect()
+        };
+        let k = match self.lists.iter().position(|l| l.pad == pad.to_bits()) {
+            Some(k) => k,
+            None => {
+                let slot = ListSlot { pad: pad.to_bits(), list: None, tree_s: Real::INFINITY, wait: 0, skip: 0 };
+                self.lists.push(slot);
+                self.lists.len() - 1
+            }
+        };
+        let clock = Instant::now();
+        self.lists[k].skip = self.lists[k].skip.saturating_sub(1);
+        let list = match self.lists[k].list.take() {
+            Some(mut list) if list.holds(&cloth) => {
+                list.served += 1;
+                if list.candidates.is_none() && list.served >= SERVED && self.keeps(k) {
+                    // The grown boxes have held long enough: the list is found within them.
+                    list.candidates = Some(list_at(self, &list.cloth));
+                }
+                list
+            }
+            last => {
+                // The last list is judged, and a new one grown at these boxes: found at once
+                // where the last one was and paid.
+                let at_once = self.judge(k, last.as_ref());
+                let grown: Vec<Aabb> =
+                    cloth.par_iter().with_min_len(PAR_GRAIN).map(|b| b.inflate(grown(b, reach))).collect();
+                let candidates = at_once.then(|| list_at(self, &grown));
+                PairList { cloth: grown, candidates, served: 1, listed: 0, spent: 0.0 }
+            }
+        };
+        let mut list = list;
+        match &list.candidates {
+            Some(candidates) => {
+                out.extend(filter(candidates));
+                list.listed += 1;
+                list.spent += clock.elapsed().as_secs_f64();
+            }
+            None => {
+                out.extend(self.tree_search(&faces, &edges, &[], &[], &cloth, &no_obs, pad, Sections::Cloth, &narrow));
+                let t = clock.elapsed().as_secs_f64();
+                let slot = &mut self.lists[k];
+                slot.tree_s = if slot.tree_s.is_finite() { 0.8 * slot.tree_s + 0.2 * t } else { t };
+            }
+        }
+        self.lists[k].list = Some(list);
+        out
+    }
+
+    /// Whether a list is found for slot `k` now (`ListSlot`).
+    fn keeps(&self, k: usize) -> bool {
+        #[cfg(test)]
+        if self.always_keep {
+            return true;
+        }
+        self.lists[k].skip == 0
+    }
+
+    /// Judges slot `k`'s last list, which no longer holds (`ListSlot`): whether the next is to be
+    /// found at once (the last one was, and cost less per search than the trees).
+    fn judge(&mut self, k: usize, last: Option<&PairList>) -> bool {
+        #[cfg(test)]
+        if self.always_keep {
+            return true;
+        }
+        let slot = &mut self.lists[k];
+        let Some(last) = last else { return false };
+        if last.listed == 0 {
+            return false;
+        }
+        let paid = last.spent / last.listed as f64 <= slot.tree_s;
+        (slot.wait, slot.skip) = match paid {
+            true => (0, 0),
+            false => {
+                let w = (2 * slot.wait).clamp(FIRST_WAIT, LONGEST_WAIT);
+                (w, w)
+            }
+        };
+        self.keeps(k)
+    }
+
+    /// `search` for the point boxes `cloth` and `obs`, from the trees: `narrow`'s results that
+    /// are `Some`, run where each candidate is found, in the candidates' order.
+    #[allow(clippy::too_many_arguments)]
+    fn tree_search<T: Send>(
+        &mut self,
+        faces: &[[usize; 3]],
+        edges: &[[usize; 2]],
+        obs_tris: &[[usize; 3]],
+        obs_edges: &[[usize; 2]],
+        cloth: &[Aabb],
+        obs: &[Aabb],
+        pad: Real,
+        sections: Sections,
         narrow: impl Fn(Candidate) -> Option<T> + Sync,
     ) -> Vec<(Candidate, T)> {
         let keep = |q: usize, c: Candidate, v: &mut Vec<Found<T>>| {
@@ -153,13 +386,16 @@ impl BroadPhase {
                 v.push((q as u32, c, t));
             }
         };
-        let n = mesh.nodes.len();
-        let faces: Vec<[usize; 3]> = (0..mesh.faces.len()).map(|f| mesh.face_nodes(f)).collect();
-        let edges: Vec<[usize; 2]> = mesh.edges.iter().map(|e| sorted_edge(e.n[0].idx(), e.n[1].idx())).collect();
-        self.forget_changed(&faces, obs_tris);
-        let cloth = spans(iv.cloth0, iv.cloth1);
-        let cf = fit(&mut self.cloth_faces, faces.len(), |f| merged(&cloth, &faces[f]));
-        let ce = fit(&mut self.cloth_edges, edges.len(), |e| merged(&cloth, &edges[e]));
+        if sections == Sections::Obstacles && obs_tris.is_empty() {
+            return Vec::new();
+        }
+        #[cfg(test)]
+        {
+            self.cloth_searches += usize::from(sections == Sections::Cloth);
+        }
+        let n = cloth.len();
+        let cf = fit(&mut self.cloth_faces, faces.len(), |f| merged(cloth, &faces[f]));
+        let ce = fit(&mut self.cloth_edges, edges.len(), |e| merged(cloth, &edges[e]));
         let cn = fit(&mut self.cloth_nodes, n, |i| cloth[i].inflate(pad));
         // A query edge's box is its edge box inflated by `pad`; inflating a node's box instead
         // bounds every inflated leaf box below it (rounding is monotone).
@@ -167,8 +403,8 @@ impl BroadPhase {
         let near = |a: &Aabb, b: &Aabb| a.overlaps(b);
         let mut out: Vec<(Candidate, T)> = Vec::new();
 
-        if !obs_tris.is_empty() {
-            let fit = self.fit_obstacles(obs_tris, obs_edges, iv, pad);
+        if sections == Sections::Obstacles {
+            let fit = self.fit_obstacles(obs_tris, obs_edges, obs, pad);
             let (of, oe, on) = (&fit.face_tree, &fit.edge_tree, &fit.node_tree);
             // Cloth node vs obstacle face.
             let found = cn.overlapping(of, false, near, |(p, pb), (t, tb), v: &mut Vec<Found<T>>| {
@@ -185,7 +421,7 @@ impl BroadPhase {
                     keep(k, (VF, [k + n, c[0], c[1], c[2]]), v);
                 }
             });
-            out.extend(by_query(found, iv.obs1.len()));
+            out.extend(by_query(found, obs.len()));
             // Cloth edge vs obstacle edge.
             let found = ce.overlapping(oe, false, near_padded, |(e, eb), (k, kb), v: &mut Vec<Found<T>>| {
                 if kb.overlaps(&eb.inflate(pad)) {
@@ -197,7 +433,7 @@ impl BroadPhase {
             out.extend(by_query(found, edges.len()));
             self.obs_fit = Some(fit);
         }
-        if self_collision {
+        if sections == Sections::Cloth {
             // Cloth node vs cloth face not containing it.
             let found = cn.overlapping(&cf, false, near, |(p, pb), (f, fb), v: &mut Vec<Found<T>>| {
                 let c = faces[f];
@@ -227,42 +463,48 @@ impl BroadPhase {
 }
 
 impl BroadPhase {
-    /// Drops the trees whose primitives changed since they were built (edges and nodes follow
-    /// from the triangles).
+    /// Drops the trees and pair lists whose primitives changed since they were built (edges and
+    /// nodes follow from the triangles).
     fn forget_changed(&mut self, faces: &[[usize; 3]], obs_tris: &[[usize; 3]]) {
         if self.cloth_key != faces {
             (self.cloth_faces, self.cloth_edges, self.cloth_nodes) = (None, None, None);
             self.cloth_key = faces.to_vec();
+            self.lists.iter_mut().for_each(|slot| slot.list = None);
         }
         if self.obs_key != obs_tris {
             self.obs_fit = None;
             self.obs_key = obs_tris.to_vec();
+            self.lists.iter_mut().for_each(|slot| slot.list = None);
         }
     }
 
-    /// The obstacle boxes over `iv` (vertex boxes inflated by `pad`) with the obstacle trees
-    /// fitted to them: the last search's where it was over the same positions (and, for the
-    /// vertices, the same pad), recomputed and its trees refitted otherwise (built for the first
-    /// search over these triangles). Call after `forget_changed`.
-    fn fit_obstacles(&mut self, obs_tris: &[[usize; 3]], obs_edges: &[[usize; 2]], iv: &Interval, pad: Real) -> ObsFit {
+    /// The obstacle trees fitted to the point boxes `points` (vertex boxes inflated by `pad`):
+    /// the last search's where it was over the same boxes (and, for the vertices, the same pad),
+    /// refitted otherwise (built for the first search over these triangles). Call after
+    /// `forget_changed`.
+    fn fit_obstacles(
+        &mut self,
+        obs_tris: &[[usize; 3]],
+        obs_edges: &[[usize; 2]],
+        points: &[Aabb],
+        pad: Real,
+    ) -> ObsFit {
         match self.obs_fit.take() {
-            Some(fit) if fit.holds(iv) && fit.pad.to_bits() == pad.to_bits() => fit,
-            Some(mut fit) if fit.holds(iv) => {
+            Some(fit) if same_boxes(&fit.points, points) && fit.pad.to_bits() == pad.to_bits() => fit,
+            Some(mut fit) if same_boxes(&fit.points, points) => {
                 fit.pad = pad;
-                let spans = &fit.spans;
-                fit.node_tree.refit_by(|k| spans[k].inflate(pad));
+                fit.node_tree.refit_by(|k| points[k].inflate(pad));
                 fit
             }
             old => {
-                let spans = spans(iv.obs0, iv.obs1);
                 let (mut ft, mut et, mut nt) = match old {
                     Some(f) => (Some(f.face_tree), Some(f.edge_tree), Some(f.node_tree)),
                     None => (None, None, None),
                 };
-                let face_tree = fit(&mut ft, obs_tris.len(), |t| merged(&spans, &obs_tris[t]));
-                let edge_tree = fit(&mut et, obs_edges.len(), |e| merged(&spans, &obs_edges[e]));
-                let node_tree = fit(&mut nt, spans.len(), |k| spans[k].inflate(pad));
-                ObsFit { obs0: iv.obs0.to_vec(), obs1: iv.obs1.to_vec(), pad, spans, face_tree, edge_tree, node_tree }
+                let face_tree = fit(&mut ft, obs_tris.len(), |t| merged(points, &obs_tris[t]));
+                let edge_tree = fit(&mut et, obs_edges.len(), |e| merged(points, &obs_edges[e]));
+                let node_tree = fit(&mut nt, points.len(), |k| points[k].inflate(pad));
+                ObsFit { points: points.to_vec(), pad, face_tree, edge_tree, node_tree }
             }
         }
     }
@@ -385,7 +627,7 @@ mod tests {
         let mut obs_edges: Vec<[usize; 2]> =
             obstacle.edges.iter().map(|e| sorted_edge(e.n[0].idx(), e.n[1].idx())).collect();
         obs_edges.sort_unstable();
-        let mut broad = BroadPhase::default();
+        let mut broad = BroadPhase { always_keep: true, ..Default::default() };
         for round in 0..3 {
             for node in &mut mesh.nodes {
                 node.x += Vec3::new(rnd(), rnd(), rnd()) * 0.05;
@@ -396,19 +638,79 @@ mod tests {
             let o1: Vec<Vec3> = o0.iter().map(|x| x + Vec3::new(rnd(), rnd(), rnd()) * 0.02).collect();
             let iv = Interval { cloth0: &x0, cloth1: &x1, obs0: &o0, obs1: &o1 };
             for pad in [1e-6, 0.01, 0.05] {
-                let got = broad.candidates(&mesh, &obs_tris, &obs_edges, &iv, pad, true);
+                let got = broad.candidates(&mesh, &obs_tris, &obs_edges, &iv, pad, 0.03, true);
                 let want = brute(&mesh, &obs_tris, &obs_edges, &iv, pad);
                 assert!(want.len() > 100, "round {round}, pad {pad}: too few candidates to test");
                 assert_eq!(got, want, "round {round}, pad {pad}");
             }
-            // The cloth moves on within the same obstacle interval (a later collision iteration
-            // of the step): the obstacles' boxes and trees are the kept ones.
+            // The cloth moves on within the same obstacle interval, each node by at most 1 cm (a
+            // later collision iteration of the step): within the 3 cm reach, so the list found
+            // above serves, and gives the definition's candidates.
+            let searched = broad.cloth_searches;
             let x2: Vec<Vec3> = x1.iter().map(|x| x + Vec3::new(rnd(), rnd(), rnd()) * 0.02).collect();
             let iv = Interval { cloth0: &x1, cloth1: &x2, obs0: &o0, obs1: &o1 };
-            let got = broad.candidates(&mesh, &obs_tris, &obs_edges, &iv, 0.05, true);
-            assert!(broad.obs_fit.as_ref().is_some_and(|f| f.holds(&iv) && f.pad == 0.05));
+            let got = broad.candidates(&mesh, &obs_tris, &obs_edges, &iv, 0.05, 0.03, true);
+            assert_eq!(broad.cloth_searches, searched, "round {round}: the kept list serves");
             assert_eq!(got, brute(&mesh, &obs_tris, &obs_edges, &iv, 0.05), "round {round}, cloth moved");
         }
+    }
+
+    /// A sheet crumpling over many small steps against a moving obstacle sheet, each search's
+    /// candidates and narrow-phase results from the kept lists equal to a fresh broad phase's
+    /// (no list kept: reach 0 and a new `BroadPhase` each time) and to the definition; the lists
+    /// serve most searches and are searched anew as the points leave them.
+    #[test]
+    fn kept_pair_lists_give_a_fresh_searchs_pairs() {
+        let mut s = 11u64;
+        let mut rnd = move || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (s >> 11) as Real / (1u64 << 53) as Real - 0.5
+        };
+        let mut mesh = rectangle(1.0, 1.0, 10, 10).unwrap();
+        let obstacle = rectangle(0.8, 0.8, 7, 7).unwrap();
+        let obs_tris: Vec<[usize; 3]> = (0..obstacle.faces.len()).map(|f| obstacle.face_nodes(f)).collect();
+        let mut obs_edges: Vec<[usize; 2]> =
+            obstacle.edges.iter().map(|e| sorted_edge(e.n[0].idx(), e.n[1].idx())).collect();
+        obs_edges.sort_unstable();
+        let mut obs: Vec<Vec3> = obstacle.nodes.iter().map(|n| n.x + Vec3::new(0.0, 0.0, 0.02)).collect();
+        let drift: Vec<Vec3> = mesh.nodes.iter().map(|_| Vec3::new(rnd(), rnd(), rnd()) * 0.004).collect();
+        // Lists kept wherever the boxes hold, and kept where measured to pay (the simulation's).
+        let mut kept = BroadPhase { always_keep: true, ..Default::default() };
+        let mut measured = BroadPhase::default();
+        let (mut searches, mut nonempty) = (0, 0);
+        for step in 0..60 {
+            let x0 = mesh.positions();
+            let x1: Vec<Vec3> =
+                x0.iter().zip(&drift).map(|(x, d)| x + d + Vec3::new(rnd(), rnd(), rnd()) * 0.002).collect();
+            let o1: Vec<Vec3> = obs.iter().map(|x| x + Vec3::new(0.001, 0.0, -0.0005)).collect();
+            // The proximity search (static interval, the thickness as pad) and a collision
+            // iteration's (the step's motion, a tiny pad), as a step makes them.
+            for (c1, pad) in [(&x0, 0.01), (&x1, 1e-6)] {
+                let iv = Interval { cloth0: &x0, cloth1: c1, obs0: &obs, obs1: &o1 };
+                // A narrow phase with a result that depends on the positions.
+                let narrow = |(_, c): Candidate| {
+                    let p = |i: usize| if i < x0.len() { c1[i] } else { o1[i - x0.len()] };
+                    let d = (p(c[0]) - p(c[1])).norm();
+                    (d < 0.12).then_some(d.to_bits())
+                };
+                let got = kept.search(&mesh, &obs_tris, &obs_edges, &iv, pad, 0.01, true, narrow);
+                let fresh = BroadPhase::default().search(&mesh, &obs_tris, &obs_edges, &iv, pad, 0.0, true, narrow);
+                assert_eq!(got, fresh, "step {step}, pad {pad}");
+                let by_measure = measured.search(&mesh, &obs_tris, &obs_edges, &iv, pad, 0.01, true, narrow);
+                assert_eq!(by_measure, fresh, "step {step}, pad {pad}, measured");
+                let all = kept.candidates(&mesh, &obs_tris, &obs_edges, &iv, pad, 0.01, true);
+                assert_eq!(all, brute(&mesh, &obs_tris, &obs_edges, &iv, pad), "step {step}, pad {pad}");
+                searches += 2;
+                nonempty += usize::from(!got.is_empty());
+            }
+            for (node, x) in mesh.nodes.iter_mut().zip(&x1) {
+                node.x = *x;
+            }
+            obs = o1;
+        }
+        assert!(nonempty > 100, "the narrow phase finds pairs ({nonempty} searches)");
+        assert!(kept.cloth_searches > 4, "the lists are searched anew as the points leave them");
+        assert!(2 * kept.cloth_searches < searches, "{} tree searches of {searches}", kept.cloth_searches);
     }
 
     #[test]
@@ -417,7 +719,7 @@ mod tests {
         let x = mesh.positions();
         let iv = Interval { cloth0: &x, cloth1: &x, obs0: &[], obs1: &[] };
         let mut broad = BroadPhase::default();
-        let first = broad.candidates(&mesh, &[], &[], &iv, 0.01, true);
+        let first = broad.candidates(&mesh, &[], &[], &iv, 0.01, 0.01, true);
         let faces = |m: &Mesh| (0..m.faces.len()).map(|f| m.face_nodes(f)).collect::<Vec<_>>();
         broad.forget_changed(&faces(&mesh), &[]);
         assert!(broad.cloth_faces.is_some(), "the same faces: the trees are kept (refitted)");
@@ -426,7 +728,7 @@ mod tests {
         mesh.rebuild_topology().unwrap();
         broad.forget_changed(&faces(&mesh), &[]);
         assert!(broad.cloth_faces.is_none() && broad.cloth_edges.is_none() && broad.cloth_nodes.is_none());
-        let again = broad.candidates(&mesh, &[], &[], &iv, 0.01, true);
+        let again = broad.candidates(&mesh, &[], &[], &iv, 0.01, 0.01, true);
         assert_eq!(again.len(), first.len());
     }
 }

@@ -339,7 +339,8 @@ impl CollisionWorld {
                 c.gap(&nodes.map(pos)) < 0.0 || c.gap(&nodes.map(ph)) < 0.0
             })
         };
-        let found = broad.search(mesh, &self.obs_tris, &self.obs_edges, &iv, th, self.params.self_collision, narrow);
+        let found =
+            broad.search(mesh, &self.obs_tris, &self.obs_edges, &iv, th, th, self.params.self_collision, narrow);
         self.broad = broad;
         let mut contacts: Vec<Contact> = found.into_iter().map(|(_, c)| c).collect();
         // One node–face contact per (cloth node, obstacle body) is enough (ARCSim keeps the

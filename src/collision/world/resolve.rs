@@ -47,8 +47,8 @@ impl CollisionWorld {
             (!(obstacle && sep(&a) < 0.0 && sep(&b) >= 0.0)).then_some(imp)
         };
         let mut broad = std::mem::take(&mut self.broad);
-        let (tris, edges) = (&self.obs_tris, &self.obs_edges);
-        let found = broad.search(mesh, tris, edges, &iv, CCD_TOLERANCE, self.params.self_collision, narrow);
+        let (tris, edges, reach) = (&self.obs_tris, &self.obs_edges, self.params.thickness);
+        let found = broad.search(mesh, tris, edges, &iv, CCD_TOLERANCE, reach, self.params.self_collision, narrow);
         self.broad = broad;
         found.into_iter().map(|((_, nodes), imp)| (nodes, imp)).collect()
     }
