@@ -42,8 +42,8 @@ impl Interval<'_> {
 }
 
 /// The trees of the last search, refitted to the next one's boxes while the primitives are the
-/// same ones (`cloth_key`, `obs_key`), rebuilt when they are not: a remesh that keeps the face count renumbers
-/// the faces, and a tree refitted over other primitives stays correct but loses its locality
+/// same ones (`cloth_key`, `obs_key`), rebuilt when they are not: a remesh that keeps the face
+/// count renumbers the faces, and a tree refitted over other primitives stays correct but loses its locality
 /// (dart.json: frames whose remesh kept the count spent 7–9 s instead of 0.25 s in each of
 /// proximity and collision).
 ///
@@ -58,10 +58,14 @@ impl Interval<'_> {
 /// and the boxes' rounding are monotone), and the list is in the tree search's order. So the
 /// candidates, and what the narrow phase makes of them, are exactly a fresh search's: the same
 /// bits whether a list was kept or not, and a resumed run finds what the uninterrupted one did.
-/// A list is found again as soon as one node leaves its grown box, or the primitives change;
-/// whether one is kept at all is measured (`ListSlot`). The cloth–obstacle pairs are searched
-/// afresh every time: a character's vertices outnumber the garment's and its hands outrun any
-/// growth that keeps a list small.
+/// A list is found again as soon as one node leaves its grown box, or the primitives change.
+/// Whether one is found at all depends on what it would cost: only where the growth is small
+/// beside the edges (`tight`), the grown boxes have held for a few searches (`SERVED`), and
+/// the last list cost less per search than the trees (`ListSlot`). Where lists pay is small
+/// meshes, whose tree search is mostly fixed cost (ARCSim's square.json: 0.2 ms a search for
+/// 400 candidates), and slow cloth. The cloth–obstacle pairs are searched afresh every time: a
+/// character's vertices outnumber the garment's and its hands outrun any growth that keeps a
+/// list small.
 ///
 /// The obstacles' trees are kept with the point boxes they were fitted to (`ObsFit`): the
 /// proximity search and every collision iteration of a step sweep the obstacles over the same
@@ -110,6 +114,8 @@ fn same_boxes(a: &[Aabb], b: &[Aabb]) -> bool {
 /// (`BroadPhase` doc), in the search's order, with the grown boxes.
 struct PairList {
     cloth: Vec<Aabb>,
+    /// Whether the growth is small beside the edges (`tight`); a list is found only then.
+    tight: bool,
     /// None while the searches are made from the trees (`SERVED`): the grown boxes then only
     /// tell whether a list would have served.
     candidates: Option<Vec<Candidate>>,
@@ -135,15 +141,17 @@ impl PairList {
 }
 
 /// The pair list of one pad (the proximity search's, the collision iterations') and what lists
-/// and tree searches have cost. Where the points move farther than their growth between
-/// searches, or the grown boxes take in many more pairs than the narrow phase keeps (a coarse
-/// dress on a dancer: 100k–200k cloth–cloth candidates, a handful of contacts), a list costs
-/// more than the tree searches it replaces; so a list is found only where its boxes have held
-/// for `SERVED` searches, and after a list has served, its cost per search (finding it
-/// included) is set against the trees' (measured on the searches made from the trees): after a
-/// list that loses none is found for `FIRST_WAIT` searches, then twice as many after each
-/// further loss, up to `LONGEST_WAIT`. The choice changes only the time taken, never the pairs
-/// (struct doc).
+/// and tree searches have cost, each search timed whole (its cloth–obstacle pairs included).
+/// Where the points move farther than their growth between searches, or the grown boxes take
+/// in many more pairs than the narrow phase keeps (a coarse dress on a dancer: 100k–200k
+/// cloth–cloth candidates, a handful of contacts), a list costs more than the tree searches it
+/// replaces; so a list is found only where the growth is tight and its boxes have held for
+/// `SERVED` searches, and after a list has served, its cost per search (finding it included)
+/// is set against the trees' (measured on the searches made from the trees): after a
+/// list that loses, none is found for `FIRST_WAIT` searches times the ratio of the two costs,
+/// then twice as long times the ratio after each further loss, up to `LONGEST_WAIT` (a list of
+/// 1.2 M candidates on ARCSim's dress-blue took 250 ms to find, against 5–10 ms for a search
+/// from the trees). The choice changes only the time taken, never the pairs (struct doc).
 struct ListSlot {
     pad: u64,
     list: Option<PairList>,
@@ -154,17 +162,17 @@ struct ListSlot {
     skip: usize,
 }
 
-/// The searches without a list after one has lost to the trees, the first time and at most
-/// (a dress on a dancer makes 50–100 searches of each pad a frame).
+/// The searches without a list after one has lost to the trees by a ratio of 1, the first
+/// time, and at most (a dress on a dancer makes 50–100 searches of each pad a frame).
 const FIRST_WAIT: usize = 16;
-const LONGEST_WAIT: usize = 4096;
+const LONGEST_WAIT: usize = 1 << 16;
 
-/// Which pairs a tree search finds: the cloth's against the obstacles', or the cloth's against
-/// its own.
-#[derive(Clone, Copy, PartialEq)]
-enum Sections {
-    Obstacles,
-    Cloth,
+/// Which pairs a tree search finds: the cloth's against the obstacles', the cloth's against its
+/// own, or both.
+#[derive(Clone, Copy)]
+struct Sections {
+    obstacles: bool,
+    cloth: bool,
 }
 
 /// The tree of `count` primitives, primitive p's box `boxed(p)`: the one in `slot` refitted when
@@ -195,6 +203,19 @@ fn merged<const K: usize>(spans: &[Aabb], ids: &[usize; K]) -> Aabb {
 fn grown(span: &Aabb, reach: Real) -> Real {
     AHEAD * (span.max - span.min).max() + reach
 }
+
+/// Whether the nodes' boxes grown by `growth` take in few more pairs than they hold now: the
+/// mean growth at most `TIGHT` times the mean extent of the edges' boxes. A list's candidates
+/// grow with the boxes' volume (ARCSim's dress-blue at its step's travel: 1.2 M candidates,
+/// 250 ms to find, against 5–10 ms for a search from the trees).
+fn tight(growth: &[Real], cloth: &[Aabb], edges: &[[usize; 2]]) -> bool {
+    let extent: Real = edges.iter().map(|e| merged(cloth, e)).map(|b| (b.max - b.min).max()).sum();
+    let grown: Real = growth.iter().sum();
+    !edges.is_empty() && grown / growth.len() as Real <= TIGHT * extent / edges.len() as Real
+}
+
+/// See `tight`.
+const TIGHT: Real = 0.25;
 
 /// How many more intervals like the one a list is found over a point's grown box covers at
 /// its travel over it (`grown`).
@@ -266,25 +287,15 @@ impl BroadPhase {
         let edges: Vec<[usize; 2]> = mesh.edges.iter().map(|e| sorted_edge(e.n[0].idx(), e.n[1].idx())).collect();
         let cloth = spans(iv.cloth0, iv.cloth1);
         let obs = spans(iv.obs0, iv.obs1);
-        let mut out =
-            self.tree_search(&faces, &edges, obs_tris, obs_edges, &cloth, &obs, pad, Sections::Obstacles, &narrow);
+        let both = Sections { obstacles: true, cloth: self_collision };
         if !self_collision {
-            return out;
+            return self.tree_search(&faces, &edges, obs_tris, obs_edges, &cloth, &obs, pad, both, &narrow);
         }
         let no_obs: [Aabb; 0] = [];
-        let filter = |candidates: &[Candidate]| -> Vec<(Candidate, T)> {
-            candidates
-                .par_iter()
-                .with_min_len(PAR_GRAIN)
-                .filter_map(|&c| match overlap(&c, pad, |i| &cloth[i]) {
-                    true => narrow(c).map(|t| (c, t)),
-                    false => None,
-                })
-                .collect()
-        };
         let list_at = |this: &mut Self, boxes: &[Aabb]| -> Vec<Candidate> {
             let all = |_| Some(());
-            let found = this.tree_search(&faces, &edges, &[], &[], boxes, &no_obs, pad, Sections::Cloth, all);
+            let own = Sections { obstacles: false, cloth: true };
+            let found = this.tree_search(&faces, &edges, &[], &[], boxes, &no_obs, pad, own, all);
             found.into_iter().map(|(c, ())| c).collect()
         };
         let k = match self.lists.iter().position(|l| l.pad == pad.to_bits()) {
@@ -295,12 +306,14 @@ impl BroadPhase {
                 self.lists.len() - 1
             }
         };
+        // Both ways of searching are timed whole (the cloth–obstacle pairs included), so that
+        // their costs compare.
         let clock = Instant::now();
         self.lists[k].skip = self.lists[k].skip.saturating_sub(1);
-        let list = match self.lists[k].list.take() {
+        let mut list = match self.lists[k].list.take() {
             Some(mut list) if list.holds(&cloth) => {
                 list.served += 1;
-                if list.candidates.is_none() && list.served >= SERVED && self.keeps(k) {
+                if list.candidates.is_none() && list.tight && list.served >= SERVED && self.keeps(k) {
                     // The grown boxes have held long enough: the list is found within them.
                     list.candidates = Some(list_at(self, &list.cloth));
                 }
@@ -310,44 +323,56 @@ impl BroadPhase {
                 // The last list is judged, and a new one grown at these boxes: found at once
                 // where the last one was and paid.
                 let at_once = self.judge(k, last.as_ref());
-                let grown: Vec<Aabb> =
-                    cloth.par_iter().with_min_len(PAR_GRAIN).map(|b| b.inflate(grown(b, reach))).collect();
-                let candidates = at_once.then(|| list_at(self, &grown));
-                PairList { cloth: grown, candidates, served: 1, listed: 0, spent: 0.0 }
+                let growth: Vec<Real> = cloth.par_iter().with_min_len(PAR_GRAIN).map(|b| grown(b, reach)).collect();
+                let grown: Vec<Aabb> = cloth.iter().zip(&growth).map(|(b, &g)| b.inflate(g)).collect();
+                let tight = self.forced() || tight(&growth, &cloth, &edges);
+                let candidates = (at_once && tight).then(|| list_at(self, &grown));
+                PairList { cloth: grown, tight, candidates, served: 1, listed: 0, spent: 0.0 }
             }
         };
-        let mut list = list;
-        match &list.candidates {
+        let out = match &list.candidates {
             Some(candidates) => {
-                out.extend(filter(candidates));
+                let others = Sections { obstacles: true, cloth: false };
+                let mut out = self.tree_search(&faces, &edges, obs_tris, obs_edges, &cloth, &obs, pad, others, &narrow);
+                out.par_extend(candidates.par_iter().with_min_len(PAR_GRAIN).filter_map(|&c| {
+                    match overlap(&c, pad, |i| &cloth[i]) {
+                        true => narrow(c).map(|t| (c, t)),
+                        false => None,
+                    }
+                }));
                 list.listed += 1;
                 list.spent += clock.elapsed().as_secs_f64();
+                out
             }
             None => {
-                out.extend(self.tree_search(&faces, &edges, &[], &[], &cloth, &no_obs, pad, Sections::Cloth, &narrow));
+                let out = self.tree_search(&faces, &edges, obs_tris, obs_edges, &cloth, &obs, pad, both, &narrow);
                 let t = clock.elapsed().as_secs_f64();
                 let slot = &mut self.lists[k];
                 slot.tree_s = if slot.tree_s.is_finite() { 0.8 * slot.tree_s + 0.2 * t } else { t };
+                out
             }
-        }
+        };
         self.lists[k].list = Some(list);
         out
     }
 
     /// Whether a list is found for slot `k` now (`ListSlot`).
     fn keeps(&self, k: usize) -> bool {
+        self.forced() || self.lists[k].skip == 0
+    }
+
+    /// Whether lists are kept wherever the boxes hold (a test's choice; never in a run).
+    fn forced(&self) -> bool {
         #[cfg(test)]
-        if self.always_keep {
-            return true;
-        }
-        self.lists[k].skip == 0
+        return self.always_keep;
+        #[cfg(not(test))]
+        false
     }
 
     /// Judges slot `k`'s last list, which no longer holds (`ListSlot`): whether the next is to be
     /// found at once (the last one was, and cost less per search than the trees).
     fn judge(&mut self, k: usize, last: Option<&PairList>) -> bool {
-        #[cfg(test)]
-        if self.always_keep {
+        if self.forced() {
             return true;
         }
         let slot = &mut self.lists[k];
@@ -355,11 +380,12 @@ impl BroadPhase {
         if last.listed == 0 {
             return false;
         }
-        let paid = last.spent / last.listed as f64 <= slot.tree_s;
-        (slot.wait, slot.skip) = match paid {
+        // The list's cost per search against the trees' (finding it included).
+        let ratio = last.spent / last.listed as f64 / slot.tree_s;
+        (slot.wait, slot.skip) = match ratio <= 1.0 {
             true => (0, 0),
             false => {
-                let w = (2 * slot.wait).clamp(FIRST_WAIT, LONGEST_WAIT);
+                let w = (2.0 * ratio * slot.wait.max(FIRST_WAIT / 2) as f64).min(LONGEST_WAIT as f64) as usize;
                 (w, w)
             }
         };
@@ -386,12 +412,12 @@ impl BroadPhase {
                 v.push((q as u32, c, t));
             }
         };
-        if sections == Sections::Obstacles && obs_tris.is_empty() {
+        if !sections.cloth && obs_tris.is_empty() {
             return Vec::new();
         }
         #[cfg(test)]
         {
-            self.cloth_searches += usize::from(sections == Sections::Cloth);
+            self.cloth_searches += usize::from(sections.cloth);
         }
         let n = cloth.len();
         let cf = fit(&mut self.cloth_faces, faces.len(), |f| merged(cloth, &faces[f]));
@@ -403,7 +429,7 @@ impl BroadPhase {
         let near = |a: &Aabb, b: &Aabb| a.overlaps(b);
         let mut out: Vec<(Candidate, T)> = Vec::new();
 
-        if sections == Sections::Obstacles {
+        if sections.obstacles && !obs_tris.is_empty() {
             let fit = self.fit_obstacles(obs_tris, obs_edges, obs, pad);
             let (of, oe, on) = (&fit.face_tree, &fit.edge_tree, &fit.node_tree);
             // Cloth node vs obstacle face.
@@ -433,7 +459,7 @@ impl BroadPhase {
             out.extend(by_query(found, edges.len()));
             self.obs_fit = Some(fit);
         }
-        if sections == Sections::Cloth {
+        if sections.cloth {
             // Cloth node vs cloth face not containing it.
             let found = cn.overlapping(&cf, false, near, |(p, pb), (f, fb), v: &mut Vec<Found<T>>| {
                 let c = faces[f];
