@@ -13,6 +13,9 @@ use rayon::prelude::*;
 use super::bvh::{Aabb, Bvh};
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
+use lists::{grown, overlap, tight, ListSlot, PairList, SERVED};
+
+mod lists;
 
 /// A candidate pair: `VF` = `[p, a, b, c]` (vertex p, face abc), `EE` = `[a0, a1, b0, b1]`.
 /// Indices below the cloth node count are cloth nodes, the others obstacle vertices.
@@ -110,63 +113,6 @@ fn same_boxes(a: &[Aabb], b: &[Aabb]) -> bool {
     a.len() == b.len() && a.iter().zip(b).all(|(p, q)| bits(p) == bits(q))
 }
 
-/// The cloth–cloth candidates of a search whose points' boxes were grown by the reach
-/// (`BroadPhase` doc), in the search's order, with the grown boxes.
-struct PairList {
-    cloth: Vec<Aabb>,
-    /// Whether the growth is small beside the edges (`tight`); a list is found only then.
-    tight: bool,
-    /// None while the searches are made from the trees (`SERVED`): the grown boxes then only
-    /// tell whether a list would have served.
-    candidates: Option<Vec<Candidate>>,
-    /// The searches the boxes have held for.
-    served: usize,
-    /// Of those, the ones served from `candidates`, and the seconds they and finding the list
-    /// took.
-    listed: usize,
-    spent: f64,
-}
-
-impl PairList {
-    /// Whether every point's box lies within the one the list was found for.
-    fn holds(&self, cloth: &[Aabb]) -> bool {
-        self.cloth.len() == cloth.len()
-            && self
-                .cloth
-                .par_iter()
-                .with_min_len(PAR_GRAIN)
-                .zip(cloth)
-                .all(|(k, b)| (0..3).all(|j| k.min[j] <= b.min[j] && b.max[j] <= k.max[j]))
-    }
-}
-
-/// The pair list of one pad (the proximity search's, the collision iterations') and what lists
-/// and tree searches have cost, each search timed whole (its cloth–obstacle pairs included).
-/// Where the points move farther than their growth between searches, or the grown boxes take
-/// in many more pairs than the narrow phase keeps (a coarse dress on a dancer: 100k–200k
-/// cloth–cloth candidates, a handful of contacts), a list costs more than the tree searches it
-/// replaces; so a list is found only where the growth is tight and its boxes have held for
-/// `SERVED` searches, and after a list has served, its cost per search (finding it included)
-/// is set against the trees' (measured on the searches made from the trees): after a
-/// list that loses, none is found for `FIRST_WAIT` searches times the ratio of the two costs,
-/// then twice as long times the ratio after each further loss, up to `LONGEST_WAIT` (a list of
-/// 1.2 M candidates on ARCSim's dress-blue took 250 ms to find, against 5–10 ms for a search
-/// from the trees). The choice changes only the time taken, never the pairs (struct doc).
-struct ListSlot {
-    pad: u64,
-    list: Option<PairList>,
-    /// Seconds per search from the trees (a moving average; infinite until measured).
-    tree_s: f64,
-    /// The wait after the last loss, and the searches left of it.
-    wait: usize,
-    skip: usize,
-}
-
-/// The searches without a list after one has lost to the trees by a ratio of 1, the first
-/// time, and at most (a dress on a dancer makes 50–100 searches of each pad a frame).
-const FIRST_WAIT: usize = 16;
-const LONGEST_WAIT: usize = 1 << 16;
-
 /// Which pairs a tree search finds: the cloth's against the obstacles', the cloth's against its
 /// own, or both.
 #[derive(Clone, Copy)]
@@ -196,43 +142,6 @@ fn spans(x0: &[Vec3], x1: &[Vec3]) -> Vec<Aabb> {
 
 fn merged<const K: usize>(spans: &[Aabb], ids: &[usize; K]) -> Aabb {
     ids.iter().fold(Aabb::empty(), |a, &i| a.merge(&spans[i]))
-}
-
-/// How far a point's box `span` (over a search's interval) is grown for a kept list: `AHEAD`
-/// times the point's travel over the interval, plus `reach`.
-fn grown(span: &Aabb, reach: Real) -> Real {
-    AHEAD * (span.max - span.min).max() + reach
-}
-
-/// Whether the nodes' boxes grown by `growth` take in few more pairs than they hold now: the
-/// mean growth at most `TIGHT` times the mean extent of the edges' boxes. A list's candidates
-/// grow with the boxes' volume (ARCSim's dress-blue at its step's travel: 1.2 M candidates,
-/// 250 ms to find, against 5–10 ms for a search from the trees).
-fn tight(growth: &[Real], cloth: &[Aabb], edges: &[[usize; 2]]) -> bool {
-    let extent: Real = edges.iter().map(|e| merged(cloth, e)).map(|b| (b.max - b.min).max()).sum();
-    let grown: Real = growth.iter().sum();
-    !edges.is_empty() && grown / growth.len() as Real <= TIGHT * extent / edges.len() as Real
-}
-
-/// See `tight`.
-const TIGHT: Real = 0.25;
-
-/// How many more intervals like the one a list is found over a point's grown box covers at
-/// its travel over it (`grown`).
-const AHEAD: Real = 3.0;
-
-/// A list is found within grown boxes that have held for this many searches (`ListSlot`).
-const SERVED: usize = 3;
-
-/// The box test of candidate `c` (`box_of` each of its points' boxes): the one the tree search
-/// applies at its leaves, for every kind of pair: the target's box (face, or second edge)
-/// against the query's (node, or first edge) inflated by `pad`.
-fn overlap<'a>((kind, c): &Candidate, pad: Real, box_of: impl Fn(usize) -> &'a Aabb) -> bool {
-    let join = |ids: &[usize]| ids.iter().fold(Aabb::empty(), |a, &i| a.merge(box_of(i)));
-    match *kind {
-        VF => join(&c[1..]).overlaps(&box_of(c[0]).inflate(pad)),
-        _ => join(&c[2..]).overlaps(&join(&c[..2]).inflate(pad)),
-    }
 }
 
 fn sorted_edge(a: usize, b: usize) -> [usize; 2] {
@@ -354,42 +263,6 @@ impl BroadPhase {
         };
         self.lists[k].list = Some(list);
         out
-    }
-
-    /// Whether a list is found for slot `k` now (`ListSlot`).
-    fn keeps(&self, k: usize) -> bool {
-        self.forced() || self.lists[k].skip == 0
-    }
-
-    /// Whether lists are kept wherever the boxes hold (a test's choice; never in a run).
-    fn forced(&self) -> bool {
-        #[cfg(test)]
-        return self.always_keep;
-        #[cfg(not(test))]
-        false
-    }
-
-    /// Judges slot `k`'s last list, which no longer holds (`ListSlot`): whether the next is to be
-    /// found at once (the last one was, and cost less per search than the trees).
-    fn judge(&mut self, k: usize, last: Option<&PairList>) -> bool {
-        if self.forced() {
-            return true;
-        }
-        let slot = &mut self.lists[k];
-        let Some(last) = last else { return false };
-        if last.listed == 0 {
-            return false;
-        }
-        // The list's cost per search against the trees' (finding it included).
-        let ratio = last.spent / last.listed as f64 / slot.tree_s;
-        (slot.wait, slot.skip) = match ratio <= 1.0 {
-            true => (0, 0),
-            false => {
-                let w = (2.0 * ratio * slot.wait.max(FIRST_WAIT / 2) as f64).min(LONGEST_WAIT as f64) as usize;
-                (w, w)
-            }
-        };
-        self.keeps(k)
     }
 
     /// `search` for the point boxes `cloth` and `obs`, from the trees: `narrow`'s results that
@@ -638,21 +511,33 @@ mod tests {
         out
     }
 
+    /// Uniform numbers in [-0.5, 0.5) from `seed` (a linear congruential generator).
+    fn uniform(seed: u64) -> impl FnMut() -> Real {
+        let mut s = seed;
+        move || {
+            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (s >> 11) as Real / (1u64 << 53) as Real - 0.5
+        }
+    }
+
+    /// A square sheet of side `size` and `n` × `n` cells as an obstacle: the mesh, its triangles
+    /// and its sorted edges.
+    fn obstacle_sheet(size: Real, n: usize) -> (Mesh, Vec<[usize; 3]>, Vec<[usize; 2]>) {
+        let obstacle = rectangle(size, size, n, n).unwrap();
+        let tris: Vec<[usize; 3]> = (0..obstacle.faces.len()).map(|f| obstacle.face_nodes(f)).collect();
+        let mut edges: Vec<[usize; 2]> =
+            obstacle.edges.iter().map(|e| sorted_edge(e.n[0].idx(), e.n[1].idx())).collect();
+        edges.sort_unstable();
+        (obstacle, tris, edges)
+    }
+
     /// A crumpled sheet moving over an interval against a second, moving sheet as the obstacle:
     /// the tree–tree candidates equal the per-query definition, before and after a refit.
     #[test]
     fn candidates_match_brute_force() {
-        let mut s = 7u64;
-        let mut rnd = move || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (s >> 11) as Real / (1u64 << 53) as Real - 0.5
-        };
+        let mut rnd = uniform(7);
         let mut mesh = rectangle(1.0, 1.0, 12, 12).unwrap();
-        let obstacle = rectangle(1.0, 1.0, 9, 9).unwrap();
-        let obs_tris: Vec<[usize; 3]> = (0..obstacle.faces.len()).map(|f| obstacle.face_nodes(f)).collect();
-        let mut obs_edges: Vec<[usize; 2]> =
-            obstacle.edges.iter().map(|e| sorted_edge(e.n[0].idx(), e.n[1].idx())).collect();
-        obs_edges.sort_unstable();
+        let (obstacle, obs_tris, obs_edges) = obstacle_sheet(1.0, 9);
         let mut broad = BroadPhase { always_keep: true, ..Default::default() };
         for round in 0..3 {
             for node in &mut mesh.nodes {
@@ -687,17 +572,9 @@ mod tests {
     /// serve most searches and are searched anew as the points leave them.
     #[test]
     fn kept_pair_lists_give_a_fresh_searchs_pairs() {
-        let mut s = 11u64;
-        let mut rnd = move || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (s >> 11) as Real / (1u64 << 53) as Real - 0.5
-        };
+        let mut rnd = uniform(11);
         let mut mesh = rectangle(1.0, 1.0, 10, 10).unwrap();
-        let obstacle = rectangle(0.8, 0.8, 7, 7).unwrap();
-        let obs_tris: Vec<[usize; 3]> = (0..obstacle.faces.len()).map(|f| obstacle.face_nodes(f)).collect();
-        let mut obs_edges: Vec<[usize; 2]> =
-            obstacle.edges.iter().map(|e| sorted_edge(e.n[0].idx(), e.n[1].idx())).collect();
-        obs_edges.sort_unstable();
+        let (obstacle, obs_tris, obs_edges) = obstacle_sheet(0.8, 7);
         let mut obs: Vec<Vec3> = obstacle.nodes.iter().map(|n| n.x + Vec3::new(0.0, 0.0, 0.02)).collect();
         let drift: Vec<Vec3> = mesh.nodes.iter().map(|_| Vec3::new(rnd(), rnd(), rnd()) * 0.004).collect();
         // Lists kept wherever the boxes hold, and kept where measured to pay (the simulation's).
