@@ -1,8 +1,7 @@
 //! Broad phase: candidate vertex–face and edge–edge pairs from bounding-volume hierarchies over
 //! cloth nodes, faces and edges and obstacle vertices, faces and edges (refit when searched,
-//! rebuilt when a count changes), searched tree against tree in parallel, with the points' boxes
-//! grown so that the pairs found serve the next searches while the points stay within the
-//! growth (`BroadPhase`); results are put in query order, so the candidate list is the same for
+//! rebuilt when a count changes), searched tree against tree in parallel, the cloth's own pairs
+//! kept between searches where that pays (`BroadPhase`); results are put in query order, so the candidate list is the same for
 //! any thread count.
 
 use std::time::Instant;
@@ -11,7 +10,7 @@ use crate::math::PAR_GRAIN;
 use rayon::prelude::*;
 
 use super::bvh::{Aabb, Bvh};
-use crate::math::{Real, Vec3};
+use crate::math::{same_bits, Real, Vec3};
 use crate::mesh::Mesh;
 use lists::{grown, overlap, tight, ListSlot, PairList, SERVED};
 
@@ -46,8 +45,8 @@ impl Interval<'_> {
 
 /// The trees of the last search, refitted to the next one's boxes while the primitives are the
 /// same ones (`cloth_key`, `obs_key`), rebuilt when they are not: a remesh that keeps the face
-/// count renumbers the faces, and a tree refitted over other primitives stays correct but loses its locality
-/// (dart.json: frames whose remesh kept the count spent 7–9 s instead of 0.25 s in each of
+/// count renumbers the faces, and a tree refitted over other primitives stays correct but loses
+/// its locality (dart.json: frames whose remesh kept the count spent 7–9 s instead of 0.25 s in each of
 /// proximity and collision).
 ///
 /// **Cloth–cloth pair lists kept between searches** (issue 17, "proximity and collision
@@ -70,7 +69,7 @@ impl Interval<'_> {
 /// character's vertices outnumber the garment's and its hands outrun any growth that keeps a
 /// list small.
 ///
-/// The obstacles' trees are kept with the point boxes they were fitted to (`ObsFit`): the
+/// The obstacles' boxes and trees are kept with the positions they were fitted to (`ObsFit`): the
 /// proximity search and every collision iteration of a step sweep the obstacles over the same
 /// interval, so the later searches of a step take them as they are instead of recomputing
 /// every obstacle primitive's box (on a crowd of five dancers, 134k obstacle faces, that was a
@@ -96,21 +95,25 @@ pub struct BroadPhase {
     cloth_searches: usize,
 }
 
-/// The obstacle trees and the point boxes they are fitted to (faces' and edges' boxes merged
-/// from them), and the padding the vertex boxes are inflated by (the one part that depends on
-/// the search). The trees hold the boxes.
+/// The obstacle trees and what they are fitted to: the interval's obstacle positions (faces'
+/// and edges' boxes over it), and the padding the vertex boxes are inflated by (the one part
+/// that depends on the search). The trees hold the boxes.
 struct ObsFit {
-    points: Vec<Aabb>,
+    obs0: Vec<Vec3>,
+    obs1: Vec<Vec3>,
     pad: Real,
+    /// Each vertex's box over the interval (`spans`).
+    spans: Vec<Aabb>,
     face_tree: Bvh,
     edge_tree: Bvh,
     node_tree: Bvh,
 }
 
-/// Whether two box lists are the same bit for bit (a signed zero counts as a change).
-fn same_boxes(a: &[Aabb], b: &[Aabb]) -> bool {
-    let bits = |b: &Aabb| [b.min, b.max].map(|v| [v.x, v.y, v.z].map(Real::to_bits));
-    a.len() == b.len() && a.iter().zip(b).all(|(p, q)| bits(p) == bits(q))
+impl ObsFit {
+    /// Whether the fit is for these positions (bitwise: a signed zero counts as a change).
+    fn holds(&self, iv: &Interval) -> bool {
+        same_bits(&self.obs0, iv.obs0) && same_bits(&self.obs1, iv.obs1)
+    }
 }
 
 /// Which pairs a tree search finds: the cloth's against the obstacles', the cloth's against its
@@ -195,16 +198,14 @@ impl BroadPhase {
         self.forget_changed(&faces, obs_tris);
         let edges: Vec<[usize; 2]> = mesh.edges.iter().map(|e| sorted_edge(e.n[0].idx(), e.n[1].idx())).collect();
         let cloth = spans(iv.cloth0, iv.cloth1);
-        let obs = spans(iv.obs0, iv.obs1);
         let both = Sections { obstacles: true, cloth: self_collision };
         if !self_collision {
-            return self.tree_search(&faces, &edges, obs_tris, obs_edges, &cloth, &obs, pad, both, &narrow);
+            return self.tree_search(&faces, &edges, obs_tris, obs_edges, &cloth, iv, pad, both, &narrow);
         }
-        let no_obs: [Aabb; 0] = [];
         let list_at = |this: &mut Self, boxes: &[Aabb]| -> Vec<Candidate> {
             let all = |_| Some(());
             let own = Sections { obstacles: false, cloth: true };
-            let found = this.tree_search(&faces, &edges, &[], &[], boxes, &no_obs, pad, own, all);
+            let found = this.tree_search(&faces, &edges, &[], &[], boxes, iv, pad, own, all);
             found.into_iter().map(|(c, ())| c).collect()
         };
         let k = match self.lists.iter().position(|l| l.pad == pad.to_bits()) {
@@ -242,7 +243,7 @@ impl BroadPhase {
         let out = match &list.candidates {
             Some(candidates) => {
                 let others = Sections { obstacles: true, cloth: false };
-                let mut out = self.tree_search(&faces, &edges, obs_tris, obs_edges, &cloth, &obs, pad, others, &narrow);
+                let mut out = self.tree_search(&faces, &edges, obs_tris, obs_edges, &cloth, iv, pad, others, &narrow);
                 out.par_extend(candidates.par_iter().with_min_len(PAR_GRAIN).filter_map(|&c| {
                     match overlap(&c, pad, |i| &cloth[i]) {
                         true => narrow(c).map(|t| (c, t)),
@@ -254,7 +255,7 @@ impl BroadPhase {
                 out
             }
             None => {
-                let out = self.tree_search(&faces, &edges, obs_tris, obs_edges, &cloth, &obs, pad, both, &narrow);
+                let out = self.tree_search(&faces, &edges, obs_tris, obs_edges, &cloth, iv, pad, both, &narrow);
                 let t = clock.elapsed().as_secs_f64();
                 let slot = &mut self.lists[k];
                 slot.tree_s = if slot.tree_s.is_finite() { 0.8 * slot.tree_s + 0.2 * t } else { t };
@@ -265,8 +266,9 @@ impl BroadPhase {
         out
     }
 
-    /// `search` for the point boxes `cloth` and `obs`, from the trees: `narrow`'s results that
-    /// are `Some`, run where each candidate is found, in the candidates' order.
+    /// `search` for the cloth node boxes `cloth` and the obstacles over `iv`, from the trees:
+    /// `narrow`'s results that are `Some`, run where each candidate is found, in the
+    /// candidates' order.
     #[allow(clippy::too_many_arguments)]
     fn tree_search<T: Send>(
         &mut self,
@@ -275,7 +277,7 @@ impl BroadPhase {
         obs_tris: &[[usize; 3]],
         obs_edges: &[[usize; 2]],
         cloth: &[Aabb],
-        obs: &[Aabb],
+        iv: &Interval,
         pad: Real,
         sections: Sections,
         narrow: impl Fn(Candidate) -> Option<T> + Sync,
@@ -303,7 +305,7 @@ impl BroadPhase {
         let mut out: Vec<(Candidate, T)> = Vec::new();
 
         if sections.obstacles && !obs_tris.is_empty() {
-            let fit = self.fit_obstacles(obs_tris, obs_edges, obs, pad);
+            let fit = self.fit_obstacles(obs_tris, obs_edges, iv, pad);
             let (of, oe, on) = (&fit.face_tree, &fit.edge_tree, &fit.node_tree);
             // Cloth node vs obstacle face.
             let found = cn.overlapping(of, false, near, |(p, pb), (t, tb), v: &mut Vec<Found<T>>| {
@@ -320,7 +322,7 @@ impl BroadPhase {
                     keep(k, (VF, [k + n, c[0], c[1], c[2]]), v);
                 }
             });
-            out.extend(by_query(found, obs.len()));
+            out.extend(by_query(found, iv.obs1.len()));
             // Cloth edge vs obstacle edge.
             let found = ce.overlapping(oe, false, near_padded, |(e, eb), (k, kb), v: &mut Vec<Found<T>>| {
                 if kb.overlaps(&eb.inflate(pad)) {
@@ -377,33 +379,29 @@ impl BroadPhase {
         }
     }
 
-    /// The obstacle trees fitted to the point boxes `points` (vertex boxes inflated by `pad`):
-    /// the last search's where it was over the same boxes (and, for the vertices, the same pad),
-    /// refitted otherwise (built for the first search over these triangles). Call after
-    /// `forget_changed`.
-    fn fit_obstacles(
-        &mut self,
-        obs_tris: &[[usize; 3]],
-        obs_edges: &[[usize; 2]],
-        points: &[Aabb],
-        pad: Real,
-    ) -> ObsFit {
+    /// The obstacle boxes over `iv` (vertex boxes inflated by `pad`) with the obstacle trees
+    /// fitted to them: the last search's where it was over the same positions (and, for the
+    /// vertices, the same pad), recomputed and its trees refitted otherwise (built for the first
+    /// search over these triangles). Call after `forget_changed`.
+    fn fit_obstacles(&mut self, obs_tris: &[[usize; 3]], obs_edges: &[[usize; 2]], iv: &Interval, pad: Real) -> ObsFit {
         match self.obs_fit.take() {
-            Some(fit) if same_boxes(&fit.points, points) && fit.pad.to_bits() == pad.to_bits() => fit,
-            Some(mut fit) if same_boxes(&fit.points, points) => {
+            Some(fit) if fit.holds(iv) && fit.pad.to_bits() == pad.to_bits() => fit,
+            Some(mut fit) if fit.holds(iv) => {
                 fit.pad = pad;
-                fit.node_tree.refit_by(|k| points[k].inflate(pad));
+                let spans = &fit.spans;
+                fit.node_tree.refit_by(|k| spans[k].inflate(pad));
                 fit
             }
             old => {
+                let spans = spans(iv.obs0, iv.obs1);
                 let (mut ft, mut et, mut nt) = match old {
                     Some(f) => (Some(f.face_tree), Some(f.edge_tree), Some(f.node_tree)),
                     None => (None, None, None),
                 };
-                let face_tree = fit(&mut ft, obs_tris.len(), |t| merged(points, &obs_tris[t]));
-                let edge_tree = fit(&mut et, obs_edges.len(), |e| merged(points, &obs_edges[e]));
-                let node_tree = fit(&mut nt, points.len(), |k| points[k].inflate(pad));
-                ObsFit { points: points.to_vec(), pad, face_tree, edge_tree, node_tree }
+                let face_tree = fit(&mut ft, obs_tris.len(), |t| merged(&spans, &obs_tris[t]));
+                let edge_tree = fit(&mut et, obs_edges.len(), |e| merged(&spans, &obs_edges[e]));
+                let node_tree = fit(&mut nt, spans.len(), |k| spans[k].inflate(pad));
+                ObsFit { obs0: iv.obs0.to_vec(), obs1: iv.obs1.to_vec(), pad, spans, face_tree, edge_tree, node_tree }
             }
         }
     }
