@@ -75,16 +75,25 @@ pub fn dihedral_hessian(x: &[Vec3; 4]) -> Mat12 {
     Mat12::from_fn(|r, c| g[r / 3].0[r % 3].eps[c])
 }
 
+/// c, θ − θ̄ and the energy c (θ − θ̄)² of one hinge: the part of `bending` that
+/// `bending_energy` shares.
+#[inline]
+fn bent(xv: &[V3<f64>; 4], rest: &BendingRest, kb: Real) -> (Real, Real, Real) {
+    let theta = unwrap_angle(dihedral_angle(xv), rest.theta0);
+    let c = 0.5 * kb * rest.shape;
+    let d = theta - rest.theta0;
+    (c, d, c * d * d)
+}
+
+/// The energy of one hinge alone, bit for bit `bending`'s (issue 17 item 3).
+pub fn bending_energy(x: &[Vec3; 4], rest: &BendingRest, kb: Real) -> Real {
+    bent(&to_v3(x), rest, kb).2
+}
+
 /// Energy, gradient and Hessian of one hinge; `kb` is the bending stiffness (N·m).
 pub fn bending(x: &[Vec3; 4], rest: &BendingRest, kb: Real, proj: Projection) -> (Real, Vec12, Mat12) {
     let xv = to_v3(x);
-    let theta = unwrap_angle(dihedral_angle(&xv), rest.theta0);
-    let c = 0.5 * kb * rest.shape;
-    let d = theta - rest.theta0;
-    let energy = c * d * d;
-    if proj == Projection::EnergyOnly {
-        return (energy, Vec12::zeros(), Mat12::zeros());
-    }
+    let (c, d, energy) = bent(&xv, rest, kb);
     let g = dihedral_gradient(&xv);
     let grad_theta = Vec12::from_fn(|r, _| g[r / 3].0[r % 3]);
     let grad = 2.0 * c * d * grad_theta;

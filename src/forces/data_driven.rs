@@ -161,6 +161,16 @@ impl StretchingGrid {
     /// The stiffness `[k₀, k₁, k₂, k₃]` at Green strain (G₀₀, G₁₁, G₀₁), trilinear in the grid, and
     /// its derivatives with respect to G₀₀, G₁₁ and G₀₁.
     pub fn stiffness(&self, g00: Real, g11: Real, g01: Real) -> ([Real; 4], [[Real; 4]; 3]) {
+        self.interpolate::<true>(g00, g11, g01)
+    }
+
+    /// `stiffness` without the derivatives (zero), the stiffness bit for bit the same.
+    pub fn stiffness_alone(&self, g00: Real, g11: Real, g01: Real) -> [Real; 4] {
+        self.interpolate::<false>(g00, g11, g01).0
+    }
+
+    #[inline]
+    fn interpolate<const DERIVATIVES: bool>(&self, g00: Real, g11: Real, g01: Real) -> ([Real; 4], [[Real; 4]; 3]) {
         let (ai, fa, da) = grid_axis(g00 + 0.25);
         let (bi, fb, db) = grid_axis(g11 + 0.25);
         let (ci, fc, dc) = grid_axis(g01.abs());
@@ -173,8 +183,10 @@ impl StretchingGrid {
                     let (w, dw) = (wa * wb * wc, [wa1 * da * wb * wc, wa * wb1 * db * wc, wa * wb * wc1 * dc]);
                     for m in 0..4 {
                         k[m] += w * s[m];
-                        for (d, dwd) in dw.iter().enumerate() {
-                            dk[d][m] += dwd * s[m];
+                        if DERIVATIVES {
+                            for (d, dwd) in dw.iter().enumerate() {
+                                dk[d][m] += dwd * s[m];
+                            }
                         }
                     }
                 }
@@ -189,6 +201,30 @@ fn voigt_stiffness(k: &[Real; 4]) -> Mat3 {
     Mat3::new(k[0], k[1], 0.0, k[1], k[2], 0.0, 0.0, 0.0, 0.5 * k[3])
 }
 
+/// The Voigt strain ε = (G₀₀, G₁₁, 2G₀₁) of a triangle, with F.
+#[inline]
+fn green_strain(x: &[Vec3; 3], rest: &MembraneRest) -> (crate::math::Mat3x2, Vec3) {
+    let f = deformation_gradient(x, rest);
+    let (f0, f1) = (f.column(0).into_owned(), f.column(1).into_owned());
+    (f, Vec3::new(0.5 * (f0.dot(&f0) - 1.0), 0.5 * (f1.dot(&f1) - 1.0), f0.dot(&f1)))
+}
+
+/// σ = C(ε) ε and the energy ½ A εᵀσ at strain `eps` and stiffness `k`.
+#[inline]
+fn measured_stress(eps: &Vec3, k: &[Real; 4], area: Real) -> (Mat3, Vec3, Real) {
+    let c = voigt_stiffness(k);
+    let sigma = c * eps;
+    (c, sigma, 0.5 * area * eps.dot(&sigma))
+}
+
+/// The energy of one membrane triangle of measured cloth alone, bit for bit
+/// `measured_membrane`'s (issue 17 item 3).
+pub fn measured_membrane_energy(x: &[Vec3; 3], rest: &MembraneRest, grid: &StretchingGrid) -> Real {
+    let (_, eps) = green_strain(x, rest);
+    let k = grid.stiffness_alone(eps[0], eps[1], 0.5 * eps[2]);
+    measured_stress(&eps, &k, rest.area).2
+}
+
 /// Energy, gradient and Jacobian of one membrane triangle of measured cloth (see the module
 /// documentation for what each means in this stress-defined model).
 pub fn measured_membrane(
@@ -197,17 +233,10 @@ pub fn measured_membrane(
     grid: &StretchingGrid,
     proj: Projection,
 ) -> (Real, Vec9, crate::math::Mat9) {
-    let f = deformation_gradient(x, rest);
-    let (f0, f1) = (f.column(0).into_owned(), f.column(1).into_owned());
-    let eps = Vec3::new(0.5 * (f0.dot(&f0) - 1.0), 0.5 * (f1.dot(&f1) - 1.0), f0.dot(&f1));
+    let (f, eps) = green_strain(x, rest);
     let (k, dk) = grid.stiffness(eps[0], eps[1], 0.5 * eps[2]);
-    let c = voigt_stiffness(&k);
-    let sigma = c * eps;
+    let (c, sigma, energy) = measured_stress(&eps, &k, rest.area);
     let a = rest.area;
-    let energy = 0.5 * a * eps.dot(&sigma);
-    if proj == Projection::EnergyOnly {
-        return (energy, Vec9::zeros(), crate::math::Mat9::zeros());
-    }
     let b = rest.b();
     let jac = strain_jacobian(&f, &b);
     let grad = a * jac.transpose() * sigma;
@@ -226,7 +255,7 @@ pub fn measured_membrane(
             }
             (d, Mat2::new(sigma[0], sigma[2], sigma[2], sigma[1]))
         }
-        Projection::Psd | Projection::EnergyOnly | Projection::Gradient => {
+        Projection::Psd | Projection::Gradient => {
             let block = pos_part2(&Mat2::new(k[0], k[1], k[1], k[2]));
             let mut d = Mat3::zeros();
             d.fixed_view_mut::<2, 2>(0, 0).copy_from(&block);
@@ -296,17 +325,20 @@ pub fn bending_stiffness(table: &[[Real; 5]; 3], curv: Real, bias: Real) -> (Rea
     }
 }
 
-/// Energy, gradient and Jacobian of one hinge of measured cloth (see the module documentation).
-pub fn measured_bending(
-    x: &[Vec3; 4],
-    rest: &BendingRest,
-    hinge: &HingeRest,
-    table: &[[Real; 5]; 3],
-    fold: FoldSign,
-    proj: Projection,
-) -> (Real, Vec12, Mat12) {
-    let xv = x.map(|p| V3([p.x, p.y, p.z]));
-    let theta = unwrap_angle(dihedral_angle(&xv), rest.theta0);
+/// What `measured_bending` and `measured_bending_energy` share: the fold's sign, the stiffness
+/// and its derivative in the curvature, ARCSim's shape factor, θ − θ̄ and the energy.
+struct Folded {
+    sign: Real,
+    ke: Real,
+    dke_dcurv: Real,
+    shape: Real,
+    d: Real,
+    energy: Real,
+}
+
+#[inline]
+fn folded(xv: &[V3<f64>; 4], rest: &BendingRest, hinge: &HingeRest, table: &[[Real; 5]; 3], fold: FoldSign) -> Folded {
+    let theta = unwrap_angle(dihedral_angle(xv), rest.theta0);
     // dκ/dθ over ℓ/(A₁+A₂).
     let sign = match fold {
         FoldSign::Absolute => theta.signum(),
@@ -322,10 +354,32 @@ pub fn measured_bending(
     // ARCSim's shape factor ℓ²/(2(A₁+A₂)); `rest.shape` is 3ℓ²/(A₁+A₂).
     let shape = rest.shape / 6.0;
     let d = theta - rest.theta0;
-    let energy = 0.25 * ke * shape * d * d;
-    if proj == Projection::EnergyOnly {
-        return (energy, Vec12::zeros(), Mat12::zeros());
-    }
+    Folded { sign, ke, dke_dcurv, shape, d, energy: 0.25 * ke * shape * d * d }
+}
+
+/// The energy of one hinge of measured cloth alone, bit for bit `measured_bending`'s (issue 17
+/// item 3).
+pub fn measured_bending_energy(
+    x: &[Vec3; 4],
+    rest: &BendingRest,
+    hinge: &HingeRest,
+    table: &[[Real; 5]; 3],
+    fold: FoldSign,
+) -> Real {
+    folded(&x.map(|p| V3([p.x, p.y, p.z])), rest, hinge, table, fold).energy
+}
+
+/// Energy, gradient and Jacobian of one hinge of measured cloth (see the module documentation).
+pub fn measured_bending(
+    x: &[Vec3; 4],
+    rest: &BendingRest,
+    hinge: &HingeRest,
+    table: &[[Real; 5]; 3],
+    fold: FoldSign,
+    proj: Projection,
+) -> (Real, Vec12, Mat12) {
+    let xv = x.map(|p| V3([p.x, p.y, p.z]));
+    let Folded { sign, ke, dke_dcurv, shape, d, energy } = folded(&xv, rest, hinge, table, fold);
     let g = dihedral_gradient(&xv);
     let grad_theta = Vec12::from_fn(|r, _| g[r / 3].0[r % 3]);
     let c = 0.5 * ke * shape;

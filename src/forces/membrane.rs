@@ -81,25 +81,35 @@ pub fn strain_jacobian(f: &Mat3x2, b: &[Vec2; 3]) -> nalgebra::SMatrix<Real, 3, 
     jac
 }
 
-/// Energy, gradient (w.r.t. x₀, x₁, x₂ stacked) and Hessian of one membrane triangle.
-pub fn membrane(x: &[Vec3; 3], rest: &MembraneRest, k: &MembraneStiffness, proj: Projection) -> (Real, Vec9, Mat9) {
+/// F, the second Piola–Kirchhoff stress σ = C ε in Voigt form and the energy of one membrane
+/// triangle: the part of `membrane` that `membrane_energy` shares.
+#[inline]
+fn stressed(x: &[Vec3; 3], rest: &MembraneRest, k: &MembraneStiffness) -> (Mat3x2, Vec3, Real) {
     let f = deformation_gradient(x, rest);
     let (f0, f1) = (f.column(0).into_owned(), f.column(1).into_owned());
     let e11 = 0.5 * (f0.dot(&f0) - 1.0);
     let e22 = 0.5 * (f1.dot(&f1) - 1.0);
     let g12 = f0.dot(&f1); // 2E₁₂
-                           // σ = C ε (second Piola–Kirchhoff stress in Voigt form).
     let s1 = k.k11 * e11 + k.k12 * e22;
     let s2 = k.k12 * e11 + k.k22 * e22;
     let s3 = k.k33 * g12;
+    let energy = rest.area * 0.5 * (e11 * s1 + e22 * s2 + g12 * s3);
+    (f, Vec3::new(s1, s2, s3), energy)
+}
+
+/// The energy of one membrane triangle alone, bit for bit `membrane`'s (the fault checks and the
+/// pop filter's line search evaluate energies only; issue 17 item 3).
+pub fn membrane_energy(x: &[Vec3; 3], rest: &MembraneRest, k: &MembraneStiffness) -> Real {
+    stressed(x, rest, k).2
+}
+
+/// Energy, gradient (w.r.t. x₀, x₁, x₂ stacked) and Hessian of one membrane triangle.
+pub fn membrane(x: &[Vec3; 3], rest: &MembraneRest, k: &MembraneStiffness, proj: Projection) -> (Real, Vec9, Mat9) {
+    let (f, sigma, energy) = stressed(x, rest, k);
+    let (s1, s2, s3) = (sigma.x, sigma.y, sigma.z);
     let a = rest.area;
-    let energy = a * 0.5 * (e11 * s1 + e22 * s2 + g12 * s3);
-    if proj == Projection::EnergyOnly {
-        return (energy, Vec9::zeros(), Mat9::zeros());
-    }
     let b = rest.b();
     let jac = strain_jacobian(&f, &b);
-    let sigma = Vec3::new(s1, s2, s3);
     let grad = a * jac.transpose() * sigma;
     if proj == Projection::Gradient {
         return (energy, grad, Mat9::zeros());
@@ -111,7 +121,7 @@ pub fn membrane(x: &[Vec3; 3], rest: &MembraneRest, k: &MembraneStiffness, proj:
     let s = Mat2::new(s1, s3, s3, s2);
     let s = match proj {
         Projection::Exact => s,
-        Projection::Psd | Projection::EnergyOnly | Projection::Gradient => pos_part2(&s),
+        Projection::Psd | Projection::Gradient => pos_part2(&s),
     };
     for i in 0..3 {
         for j in 0..3 {

@@ -18,10 +18,6 @@ pub enum Projection {
     Exact,
     /// A positive semidefinite form, used to assemble the implicit system.
     Psd,
-    /// The energy alone, bit-identical to the other forms' (gradient and Hessian returned as
-    /// zeros): the fault checks and the pop filter's line search evaluate energies only, and
-    /// the derivatives were most of their cost (issue 17 item 3).
-    EnergyOnly,
     /// The energy and its gradient, bit-identical to `Psd`'s (Hessian returned as zeros): the
     /// pop filter's Newton steps after its first reuse the first step's factor and need only
     /// the right-hand side.

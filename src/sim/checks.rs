@@ -44,7 +44,7 @@ use crate::forces::handle::Spring;
 use crate::forces::material::Material;
 use crate::forces::membrane::{deformation_gradient, max_principal_strain};
 use crate::forces::wind::{wind_face, Wind};
-use crate::forces::{Projection, RestState};
+use crate::forces::RestState;
 use crate::math::{Real, Vec3};
 use crate::mesh::Mesh;
 
@@ -101,12 +101,12 @@ impl Elastic<'_> {
     fn face_energy(&self, f: usize, x: &[Vec3]) -> Real {
         let xs = self.mesh.face_nodes(f).map(|n| x[n]);
         let mat = &self.materials[self.mesh.faces[f].material as usize];
-        mat.stretch(&xs, &self.rest.membrane[f], Projection::EnergyOnly).0
+        mat.stretch_energy(&xs, &self.rest.membrane[f])
     }
 
     fn hinge_energy(&self, k: usize, x: &[Vec3]) -> Real {
         let hg = &self.rest.hinges[k];
-        self.materials[hg.material].bend(&hg.nodes.map(|n| x[n]), hg, Projection::EnergyOnly).0
+        self.materials[hg.material].bend_energy(&hg.nodes.map(|n| x[n]), hg)
     }
 
     /// U(x̃) − U(x₀): the elastic work of moving the handle nodes in `moved` to `xt` with every
