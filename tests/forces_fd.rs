@@ -374,6 +374,25 @@ fn wind_velocity_jacobian_matches_finite_differences() {
     }
 }
 
+/// Still air does no positive work on a face (the fault checks count no wind work for it,
+/// `sim::checks`): the power f · (v₀ + v₁ + v₂) of the force at any positions and velocities is
+/// at most zero, as computed (rounding included), over faces of every size and speeds from
+/// mm/s to 100 m/s.
+#[test]
+fn still_air_does_no_positive_work() {
+    let mut rng = Rng(23);
+    for _ in 0..100_000 {
+        let size = 10f64.powf(rng.range(-3.0, 0.0));
+        let speed = 10f64.powf(rng.range(-3.0, 2.0));
+        let x = [0, 1, 2].map(|_| rng.vec() * size);
+        let v = [0, 1, 2].map(|_| rng.vec() * speed);
+        let wind = Wind { velocity: Vec3::zeros(), density: rng.range(0.5, 2.0), drag: rng.range(0.0, 0.5) };
+        let (f, _) = wind_face(&x, &v, &wind);
+        let power = f.dot(&(v[0] + v[1] + v[2]));
+        assert!(power <= 0.0, "still air did work {power:e} at x {x:?}, v {v:?}");
+    }
+}
+
 #[test]
 fn wind_on_degenerate_face_is_zero_not_nan() {
     let x = [Vec3::zeros(), Vec3::x(), 2.0 * Vec3::x()];

@@ -185,9 +185,11 @@ fn contact_energy(c: &StepContext, x: &[Vec3]) -> Real {
 }
 
 /// An upper estimate of the wind's work over the step: per face, the larger of its power at the
-/// start and at the solved end (never negative), times h.
+/// start and at the solved end (never negative), times h. Still air (ARCSim's default wind, in
+/// every one of its confs) does none: its force on a face, A (ρ|v_n| v_n n̂ + c_d v_t)/3 with
+/// v_rel = −v̄, has power f · 3v̄ = −A (ρ|v_n| v_n² + c_d |v_t|²) ≤ 0.
 fn wind_work(c: &StepContext, x1: &[Vec3], v1: &[Vec3]) -> Real {
-    let Some(wind) = c.wind else { return 0.0 };
+    let Some(wind) = c.wind.filter(|w| w.velocity != Vec3::zeros()) else { return 0.0 };
     let mesh = c.elastic.mesh;
     let v0: Vec<Vec3> = mesh.nodes.iter().map(|n| n.v).collect();
     let power = |f: usize, x: &[Vec3], v: &[Vec3]| {
