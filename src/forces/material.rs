@@ -31,6 +31,7 @@ pub struct Material {
 
 impl Material {
     /// The membrane kernel of this fabric for one face, weakened by its damage.
+    #[inline]
     pub fn stretch(&self, x: &[Vec3; 3], rest: &MembraneRest, proj: Projection) -> (Real, Vec9, Mat9) {
         slack_applied(rest, |rest| {
             let out = match &self.measured {
@@ -54,6 +55,7 @@ impl Material {
     }
 
     /// The bending kernel of this fabric for one hinge, weakened by its damage.
+    #[inline]
     pub fn bend(&self, x: &[Vec3; 4], hinge: &Hinge, proj: Projection) -> (Real, Vec12, Mat12) {
         let out = match &self.measured {
             Some(m) => measured_bending(x, &hinge.rest, &hinge.measured, &m.bending, m.fold, proj),
@@ -89,6 +91,7 @@ fn slack_applied<R>(rest: &MembraneRest, kernel: impl FnOnce(&MembraneRest) -> R
 
 /// A kernel's output with its stiffness divided by 1 + w·d (`plasticity`): energy, gradient and
 /// Hessian are all linear in the stiffness.
+#[inline]
 fn weaken<G: std::ops::MulAssign<Real>, H: std::ops::MulAssign<Real>>(
     (e, mut g, mut h): (Real, G, H),
     factor: Real,
