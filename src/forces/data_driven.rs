@@ -20,6 +20,10 @@
 //! - `Projection::Exact`: the true Jacobian of that gradient, including ∂C/∂ε (not symmetric);
 //! - `Projection::Psd`: ARCSim's Jacobian with ∂C/∂ε dropped, C's warp–weft block and the stress
 //!   of the geometric term projected to their positive parts: symmetric positive semidefinite.
+//!   ARCSim's own geometric term differs: it clamps the strains (k₀ max(G₀₀, 0) + k₁ max(G₁₁, 0)
+//!   along u, k₂ max(G₁₁, 0) + k₁ max(G₀₀, 0) along v) and leaves the shear stress out. The
+//!   trajectories differ by that (and by ARCSim's explicit air drag) and by nothing else on a
+//!   fixed mesh (README, "Where square.json's squeeze gap comes from").
 //!
 //! **Bending.** A file gives 3 rows of 5 stiffnesses (N·m): edge direction 0°, 45°, 90° from the
 //! warp, at curvatures κ = 0, 10, 20, 30, 40 m⁻¹ with κ = |θ| ℓ/(A₁+A₂) (ℓ the material edge length,
