@@ -685,8 +685,9 @@ fn simulate_scene_faces(
 ///
 /// The handles are made exact here so that this measures the sizing criterion alone. With
 /// ARCSim's own soft handles (1e3 N/m, as the converter now reads them) the squeeze refines to
-/// 589.7 faces (+25%) and releases to 138.0: a parity gap of the soft-handle model, open
-/// (README, Status).
+/// 558.5–582.0 faces over jittered starts, against 436–512 for ARCSim's own jittered starts: a
+/// parity gap, open; its causes as far as measured are in README, "Where square.json's squeeze
+/// gap comes from" (ARCSim's split-node relaxation, its explicit drag and geometric stiffness).
 const ARCSIM_SQUARE_SQUEEZED: f64 = 471.3;
 const ARCSIM_SQUARE_RELEASED: f64 = 130.0;
 
