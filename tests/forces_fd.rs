@@ -340,7 +340,12 @@ fn wind_velocity_jacobian_matches_finite_differences() {
     while checked < 60 {
         let x = [0, 1, 2].map(|_| rng.vec() * 0.1);
         let v = [0, 1, 2].map(|_| rng.vec() * 2.0);
-        let wind = Wind { velocity: rng.vec() * 10.0, density: rng.range(0.5, 2.0), drag: rng.range(0.0, 0.5) };
+        let wind = Wind {
+            velocity: rng.vec() * 10.0,
+            density: rng.range(0.5, 2.0),
+            drag: rng.range(0.0, 0.5),
+            implicit: true,
+        };
         let n = (x[1] - x[0]).cross(&(x[2] - x[0]));
         let vrel = wind.velocity - (v[0] + v[1] + v[2]) / 3.0;
         let vn = n.normalize().dot(&vrel);
@@ -386,7 +391,8 @@ fn still_air_does_no_positive_work() {
         let speed = 10f64.powf(rng.range(-3.0, 2.0));
         let x = [0, 1, 2].map(|_| rng.vec() * size);
         let v = [0, 1, 2].map(|_| rng.vec() * speed);
-        let wind = Wind { velocity: Vec3::zeros(), density: rng.range(0.5, 2.0), drag: rng.range(0.0, 0.5) };
+        let wind =
+            Wind { velocity: Vec3::zeros(), density: rng.range(0.5, 2.0), drag: rng.range(0.0, 0.5), implicit: true };
         let (f, _) = wind_face(&x, &v, &wind);
         let power = f.dot(&(v[0] + v[1] + v[2]));
         assert!(power <= 0.0, "still air did work {power:e} at x {x:?}, v {v:?}");
@@ -396,7 +402,7 @@ fn still_air_does_no_positive_work() {
 #[test]
 fn wind_on_degenerate_face_is_zero_not_nan() {
     let x = [Vec3::zeros(), Vec3::x(), 2.0 * Vec3::x()];
-    let wind = Wind { velocity: Vec3::new(5.0, 1.0, 0.0), density: 1.2, drag: 0.1 };
+    let wind = Wind { velocity: Vec3::new(5.0, 1.0, 0.0), density: 1.2, drag: 0.1, implicit: true };
     let (f, dfdv) = wind_face(&x, &[Vec3::zeros(); 3], &wind);
     assert!(f.iter().chain(dfdv.iter()).all(|c| c.is_finite()));
 }

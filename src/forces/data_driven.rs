@@ -21,9 +21,9 @@
 //! - `Projection::Psd`: ARCSim's Jacobian with ∂C/∂ε dropped, C's warp–weft block and the stress
 //!   of the geometric term projected to their positive parts: symmetric positive semidefinite.
 //!   ARCSim's own geometric term differs: it clamps the strains (k₀ max(G₀₀, 0) + k₁ max(G₁₁, 0)
-//!   along u, k₂ max(G₁₁, 0) + k₁ max(G₀₀, 0) along v) and leaves the shear stress out. The
-//!   trajectories differ by that (and by ARCSim's explicit air drag) and by nothing else on a
-//!   fixed mesh (README, "Where square.json's squeeze gap comes from").
+//!   along u, k₂ max(G₁₁, 0) + k₁ max(G₀₀, 0) along v) and leaves the shear stress out
+//!   (`Geometric::Arcsim`, the material's `geometric_stiffness: "arcsim"`, which converted
+//!   ARCSim confs get).
 //!
 //! **Bending.** A file gives 3 rows of 5 stiffnesses (N·m): edge direction 0°, 45°, 90° from the
 //! warp, at curvatures κ = 0, 10, 20, 30, 40 m⁻¹ with κ = |θ| ℓ/(A₁+A₂) (ℓ the material edge length,
@@ -66,6 +66,23 @@ pub struct MeasuredMaterial {
     pub bending: [[Real; 5]; 3],
     /// How the bending lookup treats the direction of a fold.
     pub fold: FoldSign,
+    /// The geometric stiffness of `Projection::Psd`'s membrane Jacobian.
+    pub geometric: Geometric,
+}
+
+/// The geometric (stress) term of the membrane's PSD Jacobian, A Σᵢⱼ bᵢᵀ S bⱼ I per node pair
+/// (bᵢ the shape-function gradients).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Geometric {
+    /// S = the positive part of the second Piola–Kirchhoff stress tensor, shear included.
+    #[default]
+    Stress,
+    /// ARCSim 0.2.1's (`stretching_force` in `physics.cpp`): the strains clamped instead of the
+    /// stress and no shear term, S = diag(k₀ G₀₀⁺ + k₁ G₁₁⁺, k₂ G₁₁⁺ + k₁ G₀₀⁺). Both are
+    /// positive semidefinite; the implicit step's damping differs by the choice, which is all
+    /// that separates the two simulators' trajectories on a fixed mesh (README, "Where
+    /// square.json's squeeze gap comes from").
+    Arcsim,
 }
 
 /// How the curvature that looks a measured bending stiffness up treats the direction of the fold.
@@ -95,7 +112,7 @@ impl MeasuredMaterial {
         let mut grid = StretchingGrid::new(&data.stretching);
         grid.k.iter_mut().flatten().for_each(|k| *k *= stretching_mult);
         let bending = data.bending.map(|row| row.map(|k| k * bending_mult));
-        MeasuredMaterial { stretching: grid, bending, fold: FoldSign::Absolute }
+        MeasuredMaterial { stretching: grid, bending, fold: FoldSign::Absolute, geometric: Geometric::Stress }
     }
 }
 
@@ -237,6 +254,17 @@ pub fn measured_membrane(
     grid: &StretchingGrid,
     proj: Projection,
 ) -> (Real, Vec9, crate::math::Mat9) {
+    measured_membrane_with(x, rest, grid, proj, Geometric::Stress)
+}
+
+/// `measured_membrane` with the geometric term of `Projection::Psd` chosen (`Geometric`).
+pub fn measured_membrane_with(
+    x: &[Vec3; 3],
+    rest: &MembraneRest,
+    grid: &StretchingGrid,
+    proj: Projection,
+    geometric: Geometric,
+) -> (Real, Vec9, crate::math::Mat9) {
     let (f, eps) = green_strain(x, rest);
     let (k, dk) = grid.stiffness(eps[0], eps[1], 0.5 * eps[2]);
     let (c, sigma, energy) = measured_stress(&eps, &k, rest.area);
@@ -264,7 +292,14 @@ pub fn measured_membrane(
             let mut d = Mat3::zeros();
             d.fixed_view_mut::<2, 2>(0, 0).copy_from(&block);
             d[(2, 2)] = 0.5 * k[3];
-            (d, pos_part2(&Mat2::new(sigma[0], sigma[2], sigma[2], sigma[1])))
+            let s = match geometric {
+                Geometric::Stress => pos_part2(&Mat2::new(sigma[0], sigma[2], sigma[2], sigma[1])),
+                Geometric::Arcsim => {
+                    let (g0, g1) = (eps[0].max(0.0), eps[1].max(0.0));
+                    Mat2::new(k[0] * g0 + k[1] * g1, 0.0, 0.0, k[2] * g1 + k[1] * g0)
+                }
+            };
+            (d, s)
         }
     };
     let mut hess = a * jac.transpose() * tangent * jac;

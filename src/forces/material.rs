@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use super::bending::{bending, bending_energy};
 use super::data_driven::{
-    measured_bending, measured_bending_energy, measured_membrane, measured_membrane_energy, MeasuredMaterial,
+    measured_bending, measured_bending_energy, measured_membrane_energy, measured_membrane_with, MeasuredMaterial,
 };
 use super::membrane::{membrane, membrane_energy, MembraneRest, MembraneStiffness};
 use super::plasticity::Plasticity;
@@ -35,7 +35,7 @@ impl Material {
     pub fn stretch(&self, x: &[Vec3; 3], rest: &MembraneRest, proj: Projection) -> (Real, Vec9, Mat9) {
         slack_applied(rest, |rest| {
             let out = match &self.measured {
-                Some(m) => measured_membrane(x, rest, &m.stretching, proj),
+                Some(m) => measured_membrane_with(x, rest, &m.stretching, proj, m.geometric),
                 None => membrane(x, rest, &self.membrane, proj),
             };
             weaken(out, rest.weakened)

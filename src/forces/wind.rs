@@ -10,6 +10,10 @@ pub struct Wind {
     pub velocity: Vec3,
     pub density: Real,
     pub drag: Real,
+    /// The force's velocity Jacobian enters the implicit system (backward Euler in the drag);
+    /// false: the force is explicit, taken at the step's start velocities, as ARCSim's
+    /// (`physics.cpp`'s `add_external_forces` leaves `Jext` alone).
+    pub implicit: bool,
 }
 
 /// Force on each node of a face and the (shared, negative semidefinite) velocity Jacobian block

@@ -29,7 +29,7 @@ fn folded(angle: f64) -> Mesh {
 }
 
 fn remesh_to(m: &Mesh, h: f64) -> Finished {
-    let limits = RemeshLimits { size_min: 0.005, aspect_min: 0.2, coarsen: true };
+    let limits = RemeshLimits { size_min: 0.005, aspect_min: 0.2, coarsen: true, relax_splits: Vec::new() };
     let vsize = vec![Mat2::identity() / (h * h); m.verts.len()];
     let (done, _) = remesh(m, vsize, vec![false; m.nodes.len()], &[], &[], &[], &[], &limits, &[]).unwrap();
     done.mesh.validate().unwrap();

@@ -160,7 +160,7 @@ mod tests {
             n.x = Vec3::new(r * (u / r).sin(), v, r * (1.0 - (u / r).cos()));
         }
         let vsize = vec![Mat2::identity() / (0.25 * 0.25); mesh.verts.len()];
-        let limits = RemeshLimits { size_min: 0.01, aspect_min: 0.2, coarsen: true };
+        let limits = RemeshLimits { size_min: 0.01, aspect_min: 0.2, coarsen: true, relax_splits: Vec::new() };
         let run = |jump: &[Real]| {
             let pinned = vec![false; mesh.nodes.len()];
             let (done, stats) = remesh(&mesh, vsize.clone(), pinned, &[], &[], &[], &[], &limits, jump).unwrap();

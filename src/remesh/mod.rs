@@ -10,6 +10,7 @@ pub mod guard;
 pub mod jump;
 pub mod ops;
 pub mod rest_shape;
+pub mod split_place;
 pub mod work;
 
 use crate::math::{Mat2, Real, Vec3};
@@ -35,12 +36,15 @@ pub struct RemeshStats {
 }
 
 /// Limits the remesher needs from the sizing parameters.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 pub struct RemeshLimits {
     pub size_min: Real,
     pub aspect_min: Real,
     /// Run the collapse phase (false for a one-off uniform refinement).
     pub coarsen: bool,
+    /// Per cloth (`Node::cloth`): a split moves its new node off the midpoint as ARCSim does
+    /// (`split_place`); absent cloths keep the midpoint.
+    pub relax_splits: Vec<bool>,
 }
 
 /// Remeshes `mesh` to the per-vert sizing metrics `vsize`; nodes flagged in `pinned` (handles)
@@ -75,7 +79,7 @@ pub fn remesh(
     let mut stats = RemeshStats::default();
     let mut guard = Guard::new(&w);
     flip_all(&mut w, &mut guard, &mut stats);
-    split_all(&mut w, &mut guard, &mut stats);
+    split_all(&mut w, &mut guard, limits, &mut stats);
     if limits.coarsen {
         collapse_all(&mut w, &mut guard, limits, &mut stats);
     }
@@ -139,7 +143,7 @@ fn flip_around(w: &mut Work, guard: &mut Guard, verts: &[usize], stats: &mut Rem
     }
 }
 
-fn split_all(w: &mut Work, guard: &mut Guard, stats: &mut RemeshStats) {
+fn split_all(w: &mut Work, guard: &mut Guard, limits: &RemeshLimits, stats: &mut RemeshStats) {
     for _ in 0..MAX_PASSES {
         let mut bad: Vec<(Real, usize, usize)> =
             w.edges().into_iter().map(|(a, b)| (w.split_length(a, b), a, b)).filter(|e| e.0 > 1.0).collect();
@@ -152,10 +156,23 @@ fn split_all(w: &mut Work, guard: &mut Guard, stats: &mut RemeshStats) {
             if !(w.valive[a] && w.valive[b]) || w.split_length(a, b) <= 1.0 {
                 continue;
             }
-            let Some(op) = ops::split(w, a, b) else { continue };
+            let Some(mut op) = ops::split(w, a, b) else { continue };
             let first_new = w.u.len();
-            // A split keeps the surface: no crossing test.
-            for f in op.apply(w) {
+            let midpoint = op.new_nodes[0].x;
+            // The view mode's on-screen bound (`jump`) keeps midpoints: it assumes splits keep
+            // the surface.
+            let relax = w.start.is_none() && limits.relax_splits.get(w.cloth[w.vnode[a]] as usize) == Some(&true);
+            if relax {
+                op.new_nodes[0].x = split_place::relaxed(w, &op, midpoint);
+            }
+            let added = op.apply(w);
+            // A split at the midpoint keeps the surface: no crossing test. A relaxed one moved
+            // off it, and goes back to the midpoint if that made a face cross.
+            if relax && guard.crosses(w, &op) {
+                let node = w.x.len() - 1;
+                w.x[node] = midpoint;
+            }
+            for f in added {
                 guard.insert(w, f);
             }
             stats.splits += 1;

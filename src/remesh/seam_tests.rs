@@ -94,7 +94,7 @@ fn sized(m: &Mesh, h: f64) -> Vec<Mat2> {
 }
 
 fn remesh_to(m: &Mesh, h: f64, pinned: Vec<bool>) -> (Finished, RemeshStats) {
-    let limits = RemeshLimits { size_min: 0.005, aspect_min: 0.2, coarsen: true };
+    let limits = RemeshLimits { size_min: 0.005, aspect_min: 0.2, coarsen: true, relax_splits: Vec::new() };
     let (done, stats) = remesh(m, sized(m, h), pinned, &[], &[], &[], &[], &limits, &[]).unwrap();
     done.mesh.validate().unwrap();
     (done, stats)

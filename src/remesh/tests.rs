@@ -18,7 +18,7 @@ fn uniform(mesh: &Mesh, h: f64) -> Vec<Mat2> {
 }
 
 fn limits(size_min: f64) -> RemeshLimits {
-    RemeshLimits { size_min, aspect_min: 0.2, coarsen: true }
+    RemeshLimits { size_min, aspect_min: 0.2, coarsen: true, relax_splits: Vec::new() }
 }
 
 #[test]

@@ -67,7 +67,7 @@ pub fn auto_targets(
     let first = read(0)?;
     let mut meshes = first.iter().map(first_mesh).collect::<Result<Vec<_>, _>>()?;
     let mut done = vec![false; meshes.len()];
-    let limits = RemeshLimits { size_min: 0.0, aspect_min: 0.2, coarsen: false };
+    let limits = RemeshLimits { size_min: 0.0, aspect_min: 0.2, coarsen: false, relax_splits: Vec::new() };
     for _ in 0..ROUNDS {
         let mut vsize: Vec<Vec<Mat2>> = meshes.iter().map(|m| vec![Mat2::zeros(); m.verts.len()]).collect();
         for k in 0..count {

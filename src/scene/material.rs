@@ -64,6 +64,12 @@ pub fn resolve(spec: &MaterialSpec) -> Result<Material, (&'static str, String)> 
             "no bending_curvature without \"arcsim\" (it chooses how a measured bending table is read)".into(),
         ));
     }
+    if spec.geometric_stiffness.is_some() {
+        return Err((
+            "geometric_stiffness",
+            "no geometric_stiffness without \"arcsim\" (it chooses a measured material's Jacobian)".into(),
+        ));
+    }
     let iso = [spec.youngs_modulus, spec.poisson_ratio, spec.thickness];
     let ortho = [spec.warp, spec.weft, spec.shear, spec.coupling];
     if iso.iter().any(Option::is_some) {

@@ -9,7 +9,7 @@ use serde::Deserialize;
 
 use super::spec::MaterialSpec;
 use crate::error::InputError;
-use crate::forces::data_driven::{FoldSign, MeasuredData, MeasuredMaterial};
+use crate::forces::data_driven::{FoldSign, Geometric, MeasuredData, MeasuredMaterial};
 use crate::forces::material::Material;
 use crate::forces::membrane::MembraneStiffness;
 
@@ -89,6 +89,11 @@ pub(super) fn resolve_measured(spec: &MaterialSpec, data: &MeasuredData) -> Resu
         None | Some("absolute") => FoldSign::Absolute,
         Some("signed") => FoldSign::Signed,
         Some(other) => return Err(("bending_curvature", format!("\"absolute\" or \"signed\", got \"{other}\""))),
+    };
+    measured.geometric = match spec.geometric_stiffness.as_deref() {
+        None | Some("stress") => Geometric::Stress,
+        Some("arcsim") => Geometric::Arcsim,
+        Some(other) => return Err(("geometric_stiffness", format!("\"stress\" or \"arcsim\", got \"{other}\""))),
     };
     // The linear fields describe the small-strain slope, for anything that wants a summary.
     let k = measured.stretching.stiffness(0.0, 0.0, 0.0).0;

@@ -97,6 +97,9 @@ pub struct Remesh {
     pub every: usize,
     /// View factor parameters, used in `RemeshMode::View`.
     pub view: ViewParams,
+    /// A split's new node is relaxed off the edge's midpoint as ARCSim does
+    /// (`remesh::split_place`; `split_position: "relaxed"`).
+    pub relax_splits: bool,
 }
 
 /// A validated, runnable scene.

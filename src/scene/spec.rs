@@ -132,6 +132,9 @@ pub struct WindSpec {
     /// Tangential drag coefficient (kg/(m²·s)).
     #[serde(default)]
     pub drag: f64,
+    /// Whether the force's velocity Jacobian is in the implicit solve (default true).
+    #[serde(default)]
+    pub implicit: Option<bool>,
 }
 
 fn default_air_density() -> f64 {
@@ -215,6 +218,9 @@ pub struct RemeshSpec {
     /// How criteria combine: `max` (default, tensor max) or `sum`.
     #[serde(default)]
     pub combine: Option<String>,
+    /// Where a split puts its new node: `midpoint` (default) or `relaxed` (ARCSim's).
+    #[serde(default)]
+    pub split_position: Option<String>,
     /// Remesh every N frames (default 1).
     #[serde(default)]
     pub every: Option<i64>,
@@ -335,6 +341,10 @@ pub struct MaterialSpec {
     /// (ARCSim 0.2.1's lookup of the bending table by signed curvature).
     #[serde(default)]
     pub bending_curvature: Option<String>,
+    /// With `arcsim`: `"stress"` (default) or `"arcsim"`, the membrane Jacobian's geometric term
+    /// (`forces::data_driven::Geometric`).
+    #[serde(default)]
+    pub geometric_stiffness: Option<String>,
     /// Bending plasticity: the yield curvature (1/m); absent = elastic.
     #[serde(default)]
     pub yield_curv: Option<f64>,

@@ -233,7 +233,9 @@ impl Simulation {
         let clock = Instant::now();
         let size_min = params.iter().flatten().map(|p| p.size_min).fold(Real::INFINITY, Real::min);
         let aspect_min = params.iter().flatten().map(|p| p.aspect_min).fold(1.0, Real::min);
-        let limits = RemeshLimits { size_min, aspect_min, coarsen: mode.is_adaptive() };
+        let relax_splits =
+            self.scene.cloths.iter().map(|c| c.remesh.as_ref().is_some_and(|r| r.relax_splits)).collect();
+        let limits = RemeshLimits { size_min, aspect_min, coarsen: mode.is_adaptive(), relax_splits };
         let preserved = self.preserved_nodes(&params);
         let groups = self.circle_groups();
         let (shapes, damage) = self.shapes_to_carry();

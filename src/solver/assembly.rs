@@ -98,6 +98,9 @@ fn face_local(inp: &StepInput, scheme: Scheme, proj: Projection, f: usize) -> Lo
             for d in 0..3 {
                 rhs[3 * i + d] += h * fw[d];
             }
+            if !w.implicit {
+                continue;
+            }
             for j in 0..3 {
                 let mut blk = mat.fixed_view_mut::<3, 3>(3 * i, 3 * j);
                 blk -= h * dfdv;

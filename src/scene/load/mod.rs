@@ -138,6 +138,7 @@ fn build(ctx: &Ctx, spec: SceneSpec, default_name: &str) -> Res<Scene> {
             velocity: finite3(ctx, "wind.velocity", w.velocity)?,
             density: non_negative(ctx, "wind.density", w.density)?,
             drag: non_negative(ctx, "wind.drag", w.drag)?,
+            implicit: w.implicit.unwrap_or(true),
         }),
         None => None,
     };

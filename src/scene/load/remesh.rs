@@ -76,6 +76,16 @@ pub(super) fn remesh_params(ctx: &Ctx, path: &str, r: &RemeshSpec, sides: (bool,
             return Err(ctx.err(format!("{path}.combine"), format!("expected \"max\" or \"sum\", got \"{other}\"")))
         }
     };
+    let relax_splits = match r.split_position.as_deref() {
+        None | Some("midpoint") => false,
+        Some("relaxed") => true,
+        Some(other) => {
+            return Err(ctx.err(
+                format!("{path}.split_position"),
+                format!("expected \"midpoint\" or \"relaxed\", got \"{other}\""),
+            ))
+        }
+    };
     let every = match r.every {
         None => 1,
         Some(n) if (1..=100_000).contains(&n) => n as usize,
@@ -95,6 +105,7 @@ pub(super) fn remesh_params(ctx: &Ctx, path: &str, r: &RemeshSpec, sides: (bool,
         },
         every,
         view,
+        relax_splits,
     })
 }
 

@@ -125,6 +125,8 @@ impl Conv<'_> {
                 }
                 // ARCSim reads the bending table by signed curvature (`FoldSign::Signed`).
                 fields.push(("bending_curvature", J::Str("signed".into())));
+                // ARCSim's membrane Jacobian (`Geometric::Arcsim`).
+                fields.push(("geometric_stiffness", J::Str("arcsim".into())));
             }
             None => {
                 // ARCSim's isotropic material: density in kg/m³, E in Pa, bending E t³/(12(1 − ν²)).
@@ -218,6 +220,11 @@ impl Conv<'_> {
         fields.push(("refine_obstacle", J::Bool(true)));
         if let Some(combine) = magic.combine_tensors {
             fields.push(("combine", J::Str(if combine { "max" } else { "sum" }.into())));
+        }
+        // ARCSim's split_edge relaxes the new node (`set_midpoint_position`) unless
+        // `magic.preserve_creases` is set.
+        if !magic.preserve_creases {
+            fields.push(("split_position", J::Str("relaxed".into())));
         }
         Ok(obj(fields))
     }

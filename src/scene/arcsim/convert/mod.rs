@@ -597,7 +597,8 @@ impl Conv<'_> {
     }
 
     /// ARCSim always applies its wind force (air density 1, drag 0 by default): still air damps
-    /// the cloth's normal motion.
+    /// the cloth's normal motion. Its force is explicit (no Jacobian in the system): `implicit`
+    /// false.
     fn wind(&mut self, v: Option<&Value>) -> Res<J> {
         let (mut velocity, mut density, mut drag) = ([0.0; 3], 1.0, 0.0);
         if let Some(v) = v {
@@ -609,7 +610,12 @@ impl Conv<'_> {
             density = self.opt_num(m, "density", "wind")?.unwrap_or(density);
             drag = self.opt_num(m, "drag", "wind")?.unwrap_or(drag);
         }
-        Ok(obj(vec![("velocity", nums(&velocity)), ("density", J::Num(density)), ("drag", J::Num(drag))]))
+        Ok(obj(vec![
+            ("velocity", nums(&velocity)),
+            ("density", J::Num(density)),
+            ("drag", J::Num(drag)),
+            ("implicit", J::Bool(false)),
+        ]))
     }
 }
 
