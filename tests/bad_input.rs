@@ -224,6 +224,19 @@ fn cases() -> Vec<Case> {
             "arcsim",
         ),
         json(
+            "geometric_stiffness_without_a_measured_fabric",
+            rect.replace("\"preset\": \"cotton\"", "\"preset\": \"cotton\", \"geometric_stiffness\": \"arcsim\""),
+            Loc::Field("cloths[0].material.geometric_stiffness"),
+            "arcsim",
+        ),
+        json(
+            "split_position_unknown",
+            rect.replace("\"material\"", &format!("{REMESH},\n      \"material\""))
+                .replace("\"aspect_min\": 0.2", "\"aspect_min\": 0.2, \"split_position\": \"centre\""),
+            Loc::Field("cloths[0].remesh.split_position"),
+            "\"midpoint\" or \"relaxed\"",
+        ),
+        json(
             "negative_density",
             rect.replace("\"preset\": \"cotton\"", "\"density\": -0.1"),
             Loc::Field("cloths[0].material.density"),

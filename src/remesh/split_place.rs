@@ -128,10 +128,38 @@ fn bending(x: [Vec3; 4], at: usize) -> (Mat3, Vec3) {
 mod tests {
     use super::*;
 
-    /// The stretching block is the gradient and Gauss–Newton Hessian of the unit energy at the
-    /// corner: its b matches central differences of ½ Σ (G₀₀² + G₁₁² + 2 G₀₁²)·A / 2 … checked
-    /// here through the one property the relaxation relies on: an unstrained face gives b = 0,
-    /// and a stretched one pulls its corner back.
+    /// ½ (G₀₀² + G₁₁² + G₀₁²) · A, the energy whose gradient the stretching block's b is.
+    fn unit_energy(u: [Vec2; 3], x: [Vec3; 3]) -> Real {
+        let dm = Mat2::from_columns(&[u[1] - u[0], u[2] - u[0]]);
+        let m = dm.try_inverse().unwrap();
+        let e = [x[1] - x[0], x[2] - x[0]];
+        let xu = e[0] * m[(0, 0)] + e[1] * m[(1, 0)];
+        let xv = e[0] * m[(0, 1)] + e[1] * m[(1, 1)];
+        let (g00, g11, g01) = (0.5 * (xu.dot(&xu) - 1.0), 0.5 * (xv.dot(&xv) - 1.0), 0.5 * xu.dot(&xv));
+        0.5 * dm.determinant().abs() * 0.5 * (g00 * g00 + g11 * g11 + g01 * g01)
+    }
+
+    /// The stretching block's b is the corner's gradient of the unit energy (central
+    /// differences), and its A the Gauss–Newton part of the Hessian, positive definite here.
+    #[test]
+    fn the_stretching_block_is_the_unit_energys_gradient() {
+        let u = [Vec2::new(0.1, 0.0), Vec2::new(1.0, 0.2), Vec2::new(0.3, 0.9)];
+        let x = [Vec3::new(0.0, 0.05, 0.1), Vec3::new(1.3, 0.1, -0.2), Vec3::new(0.2, 1.1, 0.3)];
+        for k in 0..3 {
+            let (a, b) = stretching(u, x, k);
+            let h = 1e-6;
+            for d in 0..3 {
+                let (mut xp, mut xm) = (x, x);
+                xp[k][d] += h;
+                xm[k][d] -= h;
+                let fd = (unit_energy(u, xp) - unit_energy(u, xm)) / (2.0 * h);
+                assert!((fd - b[d]).abs() < 1e-7 * (1.0 + fd.abs()), "corner {k}, axis {d}: b {} against {fd}", b[d]);
+            }
+            assert!(a.symmetric_eigenvalues().min() > 0.0, "corner {k}: {a}");
+        }
+    }
+
+    /// An unstrained face leaves its corner where it is; a stretched one pulls it back.
     #[test]
     fn a_flat_sheet_keeps_the_midpoint_and_a_stretched_face_pulls_back() {
         let u = [Vec2::new(0.0, 0.0), Vec2::new(1.0, 0.0), Vec2::new(0.0, 1.0)];
@@ -142,5 +170,19 @@ mod tests {
         let (a, b) = stretching(u, x, 1);
         let step = -a.try_inverse().unwrap() * b;
         assert!(step.x < 0.0, "a corner stretched outward moves back: {step:?}");
+    }
+
+    /// A hinge kinked by its node's offset straightens under the step: a wing pushed below
+    /// the plane of a flat hinge moves back up, and a flat hinge gives no push.
+    #[test]
+    fn a_kinked_hinge_straightens() {
+        let flat =
+            [Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.5, 1.0, 0.0), Vec3::new(0.5, -1.0, 0.0)];
+        assert!(bending(flat, 2).1.norm() < 1e-15);
+        let mut kinked = flat;
+        kinked[2].z = -0.1;
+        let (a, b) = bending(kinked, 2);
+        let step = -(a + REGULARISATION * Mat3::identity()).try_inverse().unwrap() * b;
+        assert!(step.z > 0.0 && step.z < 0.1 + 1e-9, "{step:?}");
     }
 }
