@@ -684,10 +684,10 @@ fn simulate_scene_faces(
 /// it replaced gave 426.2 and 147.0 (−9.6%, +13%).
 ///
 /// The handles are made exact here so that this measures the sizing criterion alone. With
-/// ARCSim's own soft handles (1e3 N/m, as the converter now reads them) the squeeze refines to
-/// 558.5–582.0 faces over jittered starts, against 436–512 for ARCSim's own jittered starts: a
-/// parity gap, open; its causes as far as measured are in README, "Where square.json's squeeze
-/// gap comes from" (ARCSim's split-node relaxation, its explicit drag and geometric stiffness).
+/// ARCSim's own soft handles (1e3 N/m, as the converter reads them) the squeeze refines to 416.0
+/// faces on every jittered start (558.5–582.0 before converted confs took ARCSim's split-node
+/// relaxation, explicit drag and geometric stiffness), against 436–512 over ARCSim's own
+/// jittered starts: README, "Where square.json's squeeze gap comes from".
 const ARCSIM_SQUARE_SQUEEZED: f64 = 471.3;
 const ARCSIM_SQUARE_RELEASED: f64 = 130.0;
 
