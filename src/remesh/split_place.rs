@@ -20,6 +20,7 @@
 //! embedding), and a curved rest shape keeps the midpoint.
 
 use crate::forces::bending::{dihedral_angle, dihedral_gradient};
+use crate::forces::membrane::{deformation_gradient, MembraneRest};
 use crate::math::dual::V3;
 use crate::math::{Mat2, Mat3, Real, Vec2, Vec3};
 
@@ -88,24 +89,21 @@ pub fn relaxed(w: &Work, op: &Op, x: Vec3) -> Vec3 {
 /// The block of corner `k` of ARCSim's unit stretching quadratic of a face with material
 /// corners `u` at world positions `x` (`remesh.cpp`'s `stretching`).
 fn stretching(u: [Vec2; 3], x: [Vec3; 3], k: usize) -> (Mat3, Vec3) {
-    let dm = Mat2::from_columns(&[u[1] - u[0], u[2] - u[0]]);
-    let area = 0.5 * dm.determinant().abs();
-    let Some(m) = dm.try_inverse() else { return (Mat3::zeros(), Vec3::zeros()) };
-    // F = [x₁ − x₀, x₂ − x₀] Dm⁻¹ = Σⱼ xⱼ (du_j, dv_j).
-    let du = [-m[(0, 0)] - m[(1, 0)], m[(0, 0)], m[(1, 0)]];
-    let dv = [-m[(0, 1)] - m[(1, 1)], m[(0, 1)], m[(1, 1)]];
-    let xu: Vec3 = (0..3).map(|j| du[j] * x[j]).sum();
-    let xv: Vec3 = (0..3).map(|j| dv[j] * x[j]).sum();
+    // A face a split made is positively oriented in material space; anything else adds nothing.
+    let Some(rest) = MembraneRest::new(u) else { return (Mat3::zeros(), Vec3::zeros()) };
+    let f = deformation_gradient(&x, &rest);
+    let (xu, xv): (Vec3, Vec3) = (f.column(0).into(), f.column(1).into());
+    let (du, dv) = (rest.b()[k].x, rest.b()[k].y);
     let (g00, g11, g01) = (0.5 * (xu.dot(&xu) - 1.0), 0.5 * (xv.dot(&xv) - 1.0), 0.5 * xu.dot(&xv));
-    let fuu = du[k] * xu;
-    let fvv = dv[k] * xv;
-    let fuv = 0.5 * (du[k] * xv + dv[k] * xu);
+    let fuu = du * xu;
+    let fvv = dv * xv;
+    let fuv = 0.5 * (du * xv + dv * xu);
     let grad = g00 * fuu + g11 * fvv + g01 * fuv;
     let hess = fuu * fuu.transpose()
         + fvv * fvv.transpose()
         + fuv * fuv.transpose()
-        + (g00.max(0.0) * du[k] * du[k] + g11.max(0.0) * dv[k] * dv[k]) * Mat3::identity();
-    (area * hess, area * grad)
+        + (g00.max(0.0) * du * du + g11.max(0.0) * dv * dv) * Mat3::identity();
+    (rest.area * hess, rest.area * grad)
 }
 
 /// The block of node `at` of ARCSim's unit hinge quadratic (`remesh.cpp`'s `bending`, rest
